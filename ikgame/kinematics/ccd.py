@@ -1,0 +1,250 @@
+"""Cyclic coordinate descent (CCD) in 2D.
+
+:func:`ccd_iteration` is Ryan Juckett's ``CalcIK_2D_CCD`` ("Cyclic Coordinate Descent in 2D",
+2009) reproduced operation for operation: bones as ``(x, y, angle)`` in parent space, the last
+bone is the end effector, one pass from the last joint to the root, early out on arrival, and
+the article's constants for the degenerate case and for detecting that nothing moved.
+:func:`solve_ccd` builds the limit-aware solve loop on top of the same per-joint rotation.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Final
+
+import numpy as np
+
+from ikgame.kinematics.skeleton import Skeleton, check_point, forward_kinematics
+from ikgame.kinematics.solver import Solution, SolveStatus
+
+__all__ = [
+    "CCDResult",
+    "EPSILON",
+    "TRIVIAL_ARC_LENGTH",
+    "wrap_angle",
+    "ccd_iteration",
+    "ccd_iteration_limited",
+    "solve_ccd",
+]
+
+EPSILON: Final = 1e-4
+"""Below this product of distances (px^2) a joint is left alone: no division by tiny numbers."""
+
+TRIVIAL_ARC_LENGTH: Final = 1e-5
+"""An end-effector arc shorter than this (px) counts as no motion, which signals failure."""
+
+CCDResult = SolveStatus
+"""The article's name for the three iteration states: ``SUCCESS``, ``PROCESSING``, ``FAILURE``."""
+
+_TWO_PI: Final = 2.0 * math.pi
+
+
+def wrap_angle(angle: float) -> float:
+    """The equivalent rotation in [-pi, pi], radians (the article's ``SimplifyAngle``).
+
+    C#'s ``%`` keeps the sign of the dividend, as :func:`math.fmod` does.
+
+    >>> round(wrap_angle(3 * math.pi / 2), 12) == round(-math.pi / 2, 12)
+    True
+    """
+    angle = math.fmod(angle, _TWO_PI)
+    if angle < -math.pi:
+        angle += _TWO_PI
+    elif angle > math.pi:
+        angle -= _TWO_PI
+    return angle
+
+
+def _rotation_toward(
+    jx: float, jy: float, ex: float, ey: float, tx: float, ty: float
+) -> tuple[float, float, float, float]:
+    """Rotation about joint (jx, jy) that puts the end (ex, ey) on the line to the target.
+
+    Returns ``(cos, sin, angle, joint_to_end_distance)``, as the article computes them.
+    """
+    cur_to_end_x = ex - jx
+    cur_to_end_y = ey - jy
+    cur_to_end_mag = math.sqrt(cur_to_end_x * cur_to_end_x + cur_to_end_y * cur_to_end_y)
+    cur_to_target_x = tx - jx
+    cur_to_target_y = ty - jy
+    cur_to_target_mag = math.sqrt(
+        cur_to_target_x * cur_to_target_x + cur_to_target_y * cur_to_target_y
+    )
+    end_target_mag = cur_to_end_mag * cur_to_target_mag
+    if end_target_mag <= EPSILON:
+        cos_rot, sin_rot = 1.0, 0.0
+    else:
+        cos_rot = (cur_to_end_x * cur_to_target_x + cur_to_end_y * cur_to_target_y) / end_target_mag
+        sin_rot = (cur_to_end_x * cur_to_target_y - cur_to_end_y * cur_to_target_x) / end_target_mag
+    rot = math.acos(max(-1.0, min(1.0, cos_rot)))
+    if sin_rot < 0.0:
+        rot = -rot
+    return cos_rot, sin_rot, rot, cur_to_end_mag
+
+
+def _check_arrival(arrival_dist: float) -> float:
+    arrival = float(arrival_dist)
+    if not math.isfinite(arrival) or arrival < 0:
+        raise ValueError(f"arrival distance must be finite and >= 0 px, got {arrival_dist!r}")
+    return arrival
+
+
+def _check_bones(bones: object) -> np.ndarray:
+    try:
+        arr = np.asarray(bones, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"bones must be rows of numbers (x, y, angle), got {bones!r}") from exc
+    if arr.ndim != 2 or arr.shape[1] != 3:
+        raise ValueError(f"bones must have shape (n, 3) of (x, y, angle), got shape {arr.shape}")
+    if arr.shape[0] == 0:
+        raise ValueError("bones must hold at least one bone, got none")
+    if not np.all(np.isfinite(arr)):
+        raise ValueError("bones must be finite (no NaN or infinity)")
+    return arr
+
+
+def ccd_iteration(
+    bones: object, target: object, arrival_dist: float
+) -> tuple[SolveStatus, np.ndarray]:
+    """One CCD iteration over ``bones``, exactly as the article's ``CalcIK_2D_CCD``.
+
+    ``bones`` is an (n, 3) array-like of ``(x, y, angle)`` in parent space (bone 0 relative to
+    the origin; the last bone is the end effector). Returns ``(result, angles)`` with the n
+    updated local angles in a new array; ``bones`` is not changed.
+
+    >>> result, angles = ccd_iteration([(0, 0, 0), (1, 0, 0), (1, 0, 0)], (1, 1), 1e-3)
+    >>> result.value, np.round(angles, 6).tolist()
+    ('success', [0.0, 1.570796, 0.0])
+    """
+    arr = _check_bones(bones)
+    tx, ty = (float(v) for v in check_point(target))
+    arrival_dist_sqr = _check_arrival(arrival_dist) ** 2
+    rows = arr.tolist()
+    num_bones = len(rows)
+
+    world_x = [rows[0][0]]
+    world_y = [rows[0][1]]
+    world_angle = rows[0][2]
+    cos_a = [math.cos(world_angle)]
+    sin_a = [math.sin(world_angle)]
+    for x, y, angle in rows[1:]:
+        world_x.append(world_x[-1] + cos_a[-1] * x - sin_a[-1] * y)
+        world_y.append(world_y[-1] + sin_a[-1] * x + cos_a[-1] * y)
+        world_angle += angle
+        cos_a.append(math.cos(world_angle))
+        sin_a.append(math.sin(world_angle))
+
+    angles = [row[2] for row in rows]
+    end_x = world_x[-1]
+    end_y = world_y[-1]
+    modified_bones = False
+    for i in range(num_bones - 2, -1, -1):
+        jx, jy = world_x[i], world_y[i]
+        cos_rot, sin_rot, rot, cur_to_end_mag = _rotation_toward(jx, jy, end_x, end_y, tx, ty)
+        cur_to_end_x = end_x - jx
+        cur_to_end_y = end_y - jy
+        end_x = jx + cos_rot * cur_to_end_x - sin_rot * cur_to_end_y
+        end_y = jy + sin_rot * cur_to_end_x + cos_rot * cur_to_end_y
+        angles[i] = wrap_angle(angles[i] + rot)
+        dx = tx - end_x
+        dy = ty - end_y
+        if dx * dx + dy * dy <= arrival_dist_sqr:
+            return SolveStatus.SUCCESS, np.array(angles)
+        if not modified_bones and abs(rot) * cur_to_end_mag > TRIVIAL_ARC_LENGTH:
+            modified_bones = True
+    status = SolveStatus.PROCESSING if modified_bones else SolveStatus.FAILURE
+    return status, np.array(angles)
+
+
+def ccd_iteration_limited(
+    skeleton: Skeleton, angles: np.ndarray, target: np.ndarray, arrival_dist: float
+) -> tuple[SolveStatus, np.ndarray]:
+    """One CCD iteration on a chain that clamps each joint to its limits as it goes.
+
+    Free joints are wrapped to [-pi, pi] as in the article; a limited joint is clamped without
+    wrapping, so it never reaches a target by going the long way round through its limit. The
+    end effector is then moved by the rotation actually applied. With no limits and
+    ``base_angle == 0`` this is :func:`ccd_iteration` on the same chain.
+
+    >>> chain = Skeleton.chain([1.0, 1.0], limits=[(-0.5, 0.5), None])
+    >>> status, angles = ccd_iteration_limited(chain, np.zeros(2), np.array([0.0, 2.0]), 1e-3)
+    >>> float(angles[0])
+    0.5
+    """
+    if not skeleton.is_chain:
+        raise ValueError("CCD needs a serial chain (parents[i] == i - 1)")
+    tx, ty = float(target[0]), float(target[1])
+    arrival_dist_sqr = arrival_dist * arrival_dist
+    lengths = skeleton.lengths.tolist()
+    lower = skeleton.lower.tolist()
+    upper = skeleton.upper.tolist()
+    new = [float(a) for a in angles]
+    n = len(new)
+
+    joint_x = [float(skeleton.base[0])]
+    joint_y = [float(skeleton.base[1])]
+    world_angle = skeleton.base_angle
+    for i in range(n):
+        world_angle += new[i]
+        joint_x.append(joint_x[i] + lengths[i] * math.cos(world_angle))
+        joint_y.append(joint_y[i] + lengths[i] * math.sin(world_angle))
+
+    end_x, end_y = joint_x[n], joint_y[n]
+    modified = False
+    for i in range(n - 1, -1, -1):
+        jx, jy = joint_x[i], joint_y[i]
+        cos_rot, sin_rot, rot, cur_to_end_mag = _rotation_toward(jx, jy, end_x, end_y, tx, ty)
+        wanted = new[i] + rot
+        if lower[i] == -math.inf and upper[i] == math.inf:
+            new[i] = wrap_angle(wanted)
+        else:
+            clamped = min(max(wanted, lower[i]), upper[i])
+            if clamped != wanted:
+                rot += clamped - wanted
+                cos_rot, sin_rot = math.cos(rot), math.sin(rot)
+            new[i] = clamped
+        cur_to_end_x = end_x - jx
+        cur_to_end_y = end_y - jy
+        end_x = jx + cos_rot * cur_to_end_x - sin_rot * cur_to_end_y
+        end_y = jy + sin_rot * cur_to_end_x + cos_rot * cur_to_end_y
+        dx = tx - end_x
+        dy = ty - end_y
+        if dx * dx + dy * dy <= arrival_dist_sqr:
+            return SolveStatus.SUCCESS, np.array(new)
+        if not modified and abs(rot) * cur_to_end_mag > TRIVIAL_ARC_LENGTH:
+            modified = True
+    return (SolveStatus.PROCESSING if modified else SolveStatus.FAILURE), np.array(new)
+
+
+def solve_ccd(
+    skeleton: Skeleton,
+    angles: np.ndarray,
+    target: np.ndarray,
+    *,
+    max_iterations: int = 10,
+    tolerance: float = 1.0,
+) -> Solution:
+    """Repeat limit-aware CCD iterations until success, failure, or ``max_iterations``.
+
+    ``angles`` (radians) warm-starts the solve; ``tolerance`` is the arrival distance, px.
+
+    >>> sol = solve_ccd(Skeleton.chain([100, 100]), np.zeros(2), np.array([0.0, 150.0]))
+    >>> sol.status.value, sol.error <= 1.0
+    ('success', True)
+    """
+    if max_iterations < 1:
+        raise ValueError(f"max_iterations must be >= 1, got {max_iterations}")
+    target = check_point(target)
+    tolerance = _check_arrival(tolerance)
+    current = skeleton.clamp(np.asarray(angles, dtype=float))
+    status = SolveStatus.PROCESSING
+    used = 0
+    while used < max_iterations and status is SolveStatus.PROCESSING:
+        status, current = ccd_iteration_limited(skeleton, current, target, tolerance)
+        used += 1
+    return Solution(current, status, used, _end_error(skeleton, current, target))
+
+
+def _end_error(skeleton: Skeleton, angles: np.ndarray, target: np.ndarray) -> float:
+    points, _ = forward_kinematics(skeleton, angles)
+    return float(np.hypot(*(points[-1] - target)))
