@@ -226,7 +226,9 @@ def solve_ccd(
 ) -> Solution:
     """Repeat limit-aware CCD iterations until success, failure, or ``max_iterations``.
 
-    ``angles`` (radians) warm-starts the solve; ``tolerance`` is the arrival distance, px.
+    ``angles`` (radians) warm-starts the solve; ``tolerance`` is the arrival distance, px. A
+    pose already within ``tolerance`` is returned as it is, with zero iterations: a controller
+    that re-solves every tick then leaves a settled chain alone.
 
     >>> sol = solve_ccd(Skeleton.chain([100, 100]), np.zeros(2), np.array([0.0, 150.0]))
     >>> sol.status.value, sol.error <= 1.0
@@ -237,6 +239,9 @@ def solve_ccd(
     target = check_point(target)
     tolerance = _check_arrival(tolerance)
     current = skeleton.clamp(np.asarray(angles, dtype=float))
+    error = _end_error(skeleton, current, target)
+    if error <= tolerance:
+        return Solution(current, SolveStatus.SUCCESS, 0, error)
     status = SolveStatus.PROCESSING
     used = 0
     while used < max_iterations and status is SolveStatus.PROCESSING:

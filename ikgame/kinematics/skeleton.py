@@ -13,6 +13,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -139,12 +140,12 @@ class Skeleton:
         """Number of links (and joints)."""
         return int(self.lengths.shape[0])
 
-    @property
+    @cached_property
     def is_chain(self) -> bool:
         """True when link ``i``'s parent is ``i - 1`` for every link."""
         return bool(np.array_equal(self.parents, np.arange(self.count) - 1))
 
-    @property
+    @cached_property
     def limited(self) -> np.ndarray:
         """(n,) bool: which joints have a finite limit on either side."""
         return np.isfinite(self.lower) | np.isfinite(self.upper)

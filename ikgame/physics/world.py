@@ -1,0 +1,204 @@
+"""The pymunk world of a level: a motorised chain, its joints and limits, and static obstacles.
+
+Each link is a dynamic body centred on the link, with a thick segment shape. Consecutive links
+are pinned by a ``PivotJoint``, driven by a ``SimpleMotor`` whose ``max_force`` is the joint's
+torque limit, and held in range by a ``RotaryLimitJoint`` where the level sets limits. Link 0
+hangs off a kinematic base body, so a script can move the base smoothly. Links of one chain
+never collide with each other; they do collide with obstacles.
+
+Angles are radians, lengths px, times s, world y up.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Final
+
+import numpy as np
+import pymunk
+
+from ikgame.kinematics import Skeleton
+from ikgame.level.model import CircleObstacle, Level, SegmentObstacle
+
+__all__ = ["World", "build_skeleton"]
+
+SPACE_ITERATIONS: Final = 60
+"""pymunk solver iterations per step: long motorised chains need more than the default 10 to
+stay stiff under gravity."""
+
+DIVERGENCE_LIMIT: Final = 1.0e6
+"""A body farther than this from the origin (px), or turned this many radians, has blown up."""
+
+_CHAIN_GROUP: Final = 1
+
+
+def build_skeleton(level: Level) -> Skeleton:
+    """The level's chain as a kinematic :class:`~ikgame.kinematics.Skeleton` (radians, px).
+
+    >>> from ikgame.level.model import Level
+    >>> lvl = Level.model_validate({"level": {"name": "x", "duration": 1.0},
+    ...     "chain": {"links": [{"length": 50.0, "repeat": 3}]},
+    ...     "script": [{"wait": 1.0}]})
+    >>> build_skeleton(lvl).reach
+    150.0
+    """
+    links = level.chain.expanded_links
+    return Skeleton.chain(
+        [link.length for link in links],
+        base=level.chain.base,
+        base_angle=math.radians(level.chain.angle),
+        limits=[link.limits_rad for link in links],
+    )
+
+
+class World:
+    """A pymunk space built from a level, with joint-level reads and motor commands.
+
+    >>> from ikgame.level.model import Level
+    >>> lvl = Level.model_validate({"level": {"name": "x", "duration": 1.0},
+    ...     "chain": {"links": [{"length": 50.0}]}, "script": [{"wait": 1.0}]})
+    >>> World(lvl).end_effector().round(6).tolist()
+    [0.0, 50.0]
+    """
+
+    def __init__(self, level: Level) -> None:
+        self.skeleton = build_skeleton(level)
+        self.space = pymunk.Space()
+        self.space.iterations = SPACE_ITERATIONS
+        self.space.gravity = level.world.gravity
+        self.space.damping = level.world.damping
+
+        self.base_body = pymunk.Body(body_type=pymunk.Body.KINEMATIC)
+        self.base_body.position = level.chain.base
+        self.base_body.angle = self.skeleton.base_angle
+        self.space.add(self.base_body)
+
+        links = level.chain.expanded_links
+        initial = self.skeleton.clamp(np.zeros(self.skeleton.count))
+        self.max_torque = np.array([link.max_torque for link in links])
+        self.max_speed = np.radians([link.max_speed for link in links])
+        self.link_widths = np.array([link.width for link in links])
+        self._halves = [link.length / 2.0 for link in links]
+        self.last_dt = 1.0 / level.world.tick_rate
+        self.bodies: list[pymunk.Body] = []
+        self.motors: list[pymunk.SimpleMotor] = []
+        self.limit_joints: list[pymunk.RotaryLimitJoint | None] = []
+        shape_filter = pymunk.ShapeFilter(group=_CHAIN_GROUP)
+
+        parent = self.base_body
+        parent_anchor = (0.0, 0.0)
+        joint = np.asarray(level.chain.base, dtype=float)
+        world_angle = self.skeleton.base_angle
+        for i, link in enumerate(links):
+            half = link.length / 2.0
+            world_angle += initial[i]
+            direction = np.array((math.cos(world_angle), math.sin(world_angle)))
+            radius = link.width / 2.0
+            body = pymunk.Body(
+                link.mass, pymunk.moment_for_segment(link.mass, (-half, 0), (half, 0), radius)
+            )
+            body.position = tuple(joint + half * direction)
+            body.angle = world_angle
+            shape = pymunk.Segment(body, (-half, 0), (half, 0), radius)
+            shape.filter = shape_filter
+            shape.friction = 0.8
+            pivot = pymunk.PivotJoint(parent, body, parent_anchor, (-half, 0))
+            # SimpleMotor drives (b.w - a.w) toward -rate; commands go through set_rates.
+            motor = pymunk.SimpleMotor(parent, body, 0.0)
+            motor.max_force = link.max_torque
+            self.space.add(body, shape, pivot, motor)
+            limit_joint = None
+            if link.limits is not None:
+                lo, hi = link.limits_rad
+                offset = self.skeleton.base_angle if i == 0 else 0.0
+                limit_joint = pymunk.RotaryLimitJoint(parent, body, lo + offset, hi + offset)
+                self.space.add(limit_joint)
+            self.bodies.append(body)
+            self.motors.append(motor)
+            self.limit_joints.append(limit_joint)
+            parent = body
+            parent_anchor = (half, 0.0)
+            joint = joint + link.length * direction
+
+        for obstacle in level.obstacles:
+            self.space.add(_obstacle_shape(self.space.static_body, obstacle))
+
+    @property
+    def count(self) -> int:
+        """Number of links."""
+        return len(self.bodies)
+
+    def joint_angles(self) -> np.ndarray:
+        """(n,) measured local joint angles, radians.
+
+        Read from the continuous body angles, so a free joint that has turned 1.5 times reads
+        3 pi; limited joints read in the same frame as their limits.
+        """
+        angles = np.fromiter((b.angle for b in self.bodies), float, self.count)
+        parents = np.concatenate(([self.base_body.angle], angles[:-1]))
+        return angles - parents
+
+    def joint_velocities(self) -> np.ndarray:
+        """(n,) relative angular velocity of each joint (child - parent), rad/s."""
+        w = np.fromiter((b.angular_velocity for b in self.bodies), float, self.count)
+        return w - np.concatenate(([self.base_body.angular_velocity], w[:-1]))
+
+    def joint_positions(self) -> np.ndarray:
+        """(n + 1, 2) world positions of the joints, then the end effector, px."""
+        points = np.empty((self.count + 1, 2))
+        for i, body in enumerate(self.bodies):
+            points[i] = body.local_to_world((-self._halves[i], 0.0))
+        points[-1] = self.end_effector()
+        return points
+
+    def end_effector(self) -> np.ndarray:
+        """(2,) world position of the chain's tip, px."""
+        return np.array(self.bodies[-1].local_to_world((self._halves[-1], 0.0)))
+
+    def set_rates(self, rates: np.ndarray) -> None:
+        """Ask each joint's motor for a relative angular velocity (child - parent), rad/s."""
+        for motor, rate in zip(self.motors, rates, strict=True):
+            motor.rate = -float(rate)
+
+    def motor_torques(self) -> np.ndarray:
+        """(n,) torque each motor applied during the last step (impulse / dt)."""
+        dt = self.last_dt
+        return np.fromiter((abs(m.impulse) / dt for m in self.motors), float, self.count)
+
+    def torque_limited(self) -> np.ndarray:
+        """(n,) bool: which motors were at their torque limit during the last step."""
+        return self.motor_torques() >= self.max_torque * (1.0 - 1e-6)
+
+    def set_gravity(self, gravity: tuple[float, float]) -> None:
+        """Change gravity from now on, px/s^2."""
+        self.space.gravity = gravity
+
+    def move_base(self, velocity: tuple[float, float]) -> None:
+        """Move the kinematic base at ``velocity`` (px/s) until told otherwise."""
+        self.base_body.velocity = velocity
+
+    def step(self, dt: float) -> None:
+        """Advance the world by ``dt`` seconds."""
+        self.last_dt = dt
+        self.space.step(dt)
+
+    def diverged(self) -> bool:
+        """True when any body's pose is NaN, infinite, or absurdly far away.
+
+        A blow-up shows in positions within a tick or two, so velocities are not read.
+        """
+        values = np.fromiter(
+            (v for b in self.bodies for v in (*b.position, b.angle)), float, 3 * self.count
+        )
+        return not (np.all(np.isfinite(values)) and np.all(np.abs(values) < DIVERGENCE_LIMIT))
+
+
+def _obstacle_shape(
+    static: pymunk.Body, obstacle: SegmentObstacle | CircleObstacle
+) -> pymunk.Shape:
+    if isinstance(obstacle, SegmentObstacle):
+        shape: pymunk.Shape = pymunk.Segment(static, obstacle.a, obstacle.b, obstacle.radius)
+    else:
+        shape = pymunk.Circle(static, obstacle.radius, obstacle.center)
+    shape.friction = obstacle.friction
+    return shape
