@@ -109,9 +109,8 @@ class World:
             self.space.add(body, shape, pivot, motor)
             limit_joint = None
             if link.limits is not None:
-                lo, hi = link.limits_rad
-                offset = self.skeleton.base_angle if i == 0 else 0.0
-                limit_joint = pymunk.RotaryLimitJoint(parent, body, lo + offset, hi + offset)
+                # b.angle - a.angle is the local angle: the base body carries base_angle.
+                limit_joint = pymunk.RotaryLimitJoint(parent, body, *link.limits_rad)
                 self.space.add(limit_joint)
             self.bodies.append(body)
             self.motors.append(motor)

@@ -1,0 +1,104 @@
+"""The pymunk world: motor sign, joint reads, limits, collisions, divergence."""
+
+import math
+
+import numpy as np
+import pymunk
+import pytest
+
+from ikgame.level.model import Level
+from ikgame.physics.world import World, build_skeleton
+from ikgame.kinematics import forward_kinematics
+
+
+def _level(links, *, gravity=(0.0, 0.0), obstacles=(), angle=90.0, base=(0.0, 0.0)) -> Level:
+    return Level.model_validate(
+        {
+            "level": {"name": "test", "duration": 5.0},
+            "world": {"gravity": list(gravity), "damping": 1.0},
+            "chain": {"base": list(base), "angle": angle, "links": links},
+            "obstacles": list(obstacles),
+            "script": [{"wait": 1.0}],
+        }
+    )
+
+
+def test_initial_pose_matches_forward_kinematics():
+    level = _level([{"length": 100.0}, {"length": 50.0, "limits": [20.0, 90.0]}], base=(10, 20))
+    world = World(level)
+    angles = world.joint_angles()
+    assert angles == pytest.approx([0.0, math.radians(20.0)])
+    points, _ = forward_kinematics(build_skeleton(level), angles)
+    assert world.joint_positions() == pytest.approx(points)
+    assert world.end_effector() == pytest.approx(points[-1])
+
+
+def test_motor_rate_turns_the_child_counterclockwise_relative_to_the_parent():
+    # pymunk's SimpleMotor drives b.w - a.w toward -rate; set_rates must hide that sign.
+    world = World(_level([{"length": 100.0}, {"length": 100.0}]))
+    world.set_rates(np.array([0.0, 1.0]))
+    for _ in range(60):
+        world.step(1 / 60)
+    assert world.joint_velocities()[1] == pytest.approx(1.0, rel=1e-3)
+    # One tick of lag: the first step integrates position before the motor has acted.
+    assert world.joint_angles()[1] == pytest.approx(59 / 60, rel=1e-3)
+    assert world.joint_angles()[0] == pytest.approx(0.0, abs=1e-3)
+
+
+def test_raw_simple_motor_sign_is_what_the_world_compensates():
+    space = pymunk.Space()
+    a = pymunk.Body(body_type=pymunk.Body.KINEMATIC)
+    b = pymunk.Body(1.0, 10.0)
+    motor = pymunk.SimpleMotor(a, b, 2.0)
+    space.add(a, b, motor)
+    space.step(0.01)
+    assert b.angular_velocity == pytest.approx(-2.0)
+
+
+def test_rotary_limit_holds_a_joint_driven_past_it():
+    world = World(_level([{"length": 100.0}, {"length": 100.0, "limits": [-30.0, 30.0]}]))
+    world.set_rates(np.array([0.0, 3.0]))
+    for _ in range(240):
+        world.step(1 / 240)
+    assert world.joint_angles()[1] <= math.radians(30.0) + math.radians(1.0)
+
+
+def test_torque_limit_is_reported_when_gravity_wins():
+    level = _level(
+        [{"length": 200.0, "mass": 5.0, "max_torque": 1000.0}], gravity=(0, -900), angle=0.0
+    )
+    world = World(level)
+    world.set_rates(np.zeros(1))
+    world.step(1 / 240)
+    assert world.torque_limited().tolist() == [True]
+    assert world.motor_torques()[0] == pytest.approx(1000.0, rel=1e-6)
+
+
+def test_chain_links_do_not_collide_with_each_other_but_hit_obstacles():
+    level = _level(
+        [{"length": 100.0, "max_torque": 1.0}],
+        gravity=(0, -900),
+        angle=0.0,
+        obstacles=[{"kind": "segment", "a": [50, -40], "b": [150, -40], "radius": 2}],
+    )
+    world = World(level)
+    for _ in range(480):
+        world.step(1 / 240)
+    # The link swings down and rests on the obstacle instead of hanging straight down.
+    assert world.end_effector()[1] > -60.0
+
+
+def test_divergence_is_detected():
+    world = World(_level([{"length": 100.0}]))
+    assert not world.diverged()
+    world.bodies[0].position = (math.nan, 0.0)
+    assert world.diverged()
+
+
+def test_base_joint_limit_is_relative_to_the_mount_direction():
+    level = _level([{"length": 100.0, "limits": [-20.0, 20.0]}], angle=90.0)
+    world = World(level)
+    world.set_rates(np.array([-3.0]))
+    for _ in range(240):
+        world.step(1 / 240)
+    assert world.joint_angles()[0] == pytest.approx(math.radians(-20.0), abs=math.radians(1.0))
