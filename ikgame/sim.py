@@ -1,0 +1,274 @@
+"""The simulation loop: level script -> controller -> pymunk world, at a fixed timestep.
+
+A :class:`Simulation` is what a game loop drives: call :meth:`Simulation.step` once per tick
+(or :meth:`Simulation.run` to the end), read or override the target from code, and read the
+pose. Each tick is a short sequence of named steps: target, solve, command motors, step the
+world, observe. Snapshots (plain arrays) are recorded at the level's fps for the renderer.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Literal
+
+import numpy as np
+
+from ikgame.control.controller import Controller
+from ikgame.level.model import CircleObstacle, Level, SegmentObstacle
+from ikgame.level.script import ScriptRunner, StepOutcome
+from ikgame.physics.world import World
+from ikgame.snapshot import Scene, Snapshot
+
+__all__ = ["Simulation", "RunResult", "TickInfo", "run_level"]
+
+Status = Literal["passed", "failed", "diverged"]
+
+
+@dataclass(frozen=True, eq=False)
+class TickInfo:
+    """Telemetry of one tick, for logging or plotting.
+
+    Attributes:
+        tick: ticks done, including this one.
+        time: simulated time at the end of the tick, s.
+        solver_status: ``"success"``, ``"processing"`` or ``"failure"`` (the CCD article's states).
+        iterations: solver iterations used this tick.
+        error: end-effector distance to the target after the tick, px (nan without a target).
+        torque_limited: (n,) which motors hit their torque limit this tick.
+    """
+
+    tick: int
+    time: float
+    solver_status: str
+    iterations: int
+    error: float
+    torque_limited: np.ndarray
+
+
+@dataclass(frozen=True)
+class RunResult:
+    """What a run achieved; ``as_dict()`` is the content of ``results.json``.
+
+    Attributes:
+        level: the level's name.
+        solver: the solver used at the start.
+        status: ``passed`` (every step passed), ``failed`` or ``diverged`` (the physics blew up).
+        steps: per-step outcomes.
+        ticks: physics ticks run.
+        sim_time: simulated time, s.
+        options: the options the run was made with.
+    """
+
+    level: str
+    solver: str
+    status: Status
+    steps: tuple[StepOutcome, ...]
+    ticks: int
+    sim_time: float
+    options: dict[str, object] = field(default_factory=dict)
+
+    def as_dict(self) -> dict[str, object]:
+        """Plain data in a fixed key order."""
+        return {
+            "level": self.level,
+            "solver": self.solver,
+            "status": self.status,
+            "steps_passed": sum(s.passed for s in self.steps),
+            "steps_total": len(self.steps),
+            "ticks": self.ticks,
+            "sim_time": round(self.sim_time, 6),
+            "steps": [s.as_dict() for s in self.steps],
+            "options": dict(self.options),
+        }
+
+
+class Simulation:
+    """A level running in a pymunk world under IK control.
+
+    >>> from ikgame.level.model import Level
+    >>> lvl = Level.model_validate({"level": {"name": "x", "duration": 2.0},
+    ...     "world": {"gravity": [0.0, 0.0]}, "chain": {"links": [{"length": 80.0, "repeat": 2}]},
+    ...     "script": [{"reach": [100.0, 60.0]}]})
+    >>> sim = Simulation(lvl)
+    >>> sim.run().status
+    'passed'
+    """
+
+    def __init__(self, level: Level, *, solver: str | None = None, record: bool = True) -> None:
+        self.level = level
+        self.world = World(level)
+        self.controller = Controller(
+            self.world.skeleton,
+            solver or level.chain.solver,
+            max_speed=self.world.max_speed,
+            gain=level.chain.gain,
+            iterations=level.chain.iterations,
+            arrival=level.chain.arrival,
+        )
+        self.script = ScriptRunner(level.script)
+        self.dt = 1.0 / level.world.tick_rate
+        self.tick = 0
+        self.diverged = False
+        self.record = record
+        self.snapshots: list[Snapshot] = []
+        self._override: np.ndarray | None = None
+        self._max_ticks = round(level.level.duration * level.world.tick_rate)
+        self._fps = level.world.fps
+        self._last = TickInfo(0, 0.0, "processing", 0, math.nan, np.zeros(self.world.count, bool))
+        self._result: RunResult | None = None
+        self.scene = _scene(level, self.world)
+        if record:
+            self.snapshots.append(self.snapshot())
+
+    @property
+    def time(self) -> float:
+        """Simulated time, s."""
+        return self.tick * self.dt
+
+    @property
+    def target(self) -> np.ndarray | None:
+        """The point the chain aims at, px: the code's override if set, else the script's."""
+        return self._override if self._override is not None else self.script.target
+
+    @target.setter
+    def target(self, point: tuple[float, float] | np.ndarray | None) -> None:
+        """Aim at ``point`` from code (px); ``None`` hands control back to the script."""
+        if point is None:
+            self._override = None
+            return
+        arr = np.asarray(point, dtype=float)
+        if arr.shape != (2,) or not np.all(np.isfinite(arr)):
+            raise ValueError(f"target must be a finite (x, y) pair in px, got {point!r}")
+        self._override = arr
+
+    @property
+    def done(self) -> bool:
+        """True when the script has finished, the level's time is up, or the run diverged."""
+        return self.diverged or self.script.done or self.tick >= self._max_ticks
+
+    @property
+    def last_tick(self) -> TickInfo:
+        """Telemetry of the latest tick."""
+        return self._last
+
+    def joint_angles(self) -> np.ndarray:
+        """(n,) measured local joint angles, radians."""
+        return self.world.joint_angles()
+
+    def joint_positions(self) -> np.ndarray:
+        """(n + 1, 2) joint positions then the end effector, world px."""
+        return self.world.joint_positions()
+
+    def step(self) -> TickInfo:
+        """Advance one tick and return its telemetry; a no-op once :attr:`done`."""
+        if self.done:
+            return self._last
+        target = self.target
+        command = self.controller.command(self.world.joint_angles(), target)
+        self.world.set_rates(command.rates)
+        self.world.step(self.dt)
+        self.tick += 1
+        if self.world.diverged():
+            self.diverged = True
+            return self._last
+        effector = self.world.end_effector()
+        error = math.nan if target is None else float(np.hypot(*(effector - target)))
+        self.script.observe(self.time, self.dt, effector)
+        self._last = TickInfo(
+            self.tick,
+            self.time,
+            command.solution.status.value,
+            command.solution.iterations,
+            error,
+            self.world.torque_limited(),
+        )
+        if (
+            self.record
+            and self.tick * self._fps >= len(self.snapshots) * self.level.world.tick_rate
+        ):
+            self.snapshots.append(self.snapshot())
+        return self._last
+
+    def run(self, progress: Callable[[float], None] | None = None) -> RunResult:
+        """Step until :attr:`done`; ``progress(fraction)`` is called now and then. Returns the result."""
+        report_every = max(1, self._max_ticks // 200)
+        while not self.done:
+            self.step()
+            if progress is not None and self.tick % report_every == 0:
+                progress(self.tick / self._max_ticks)
+        if progress is not None:
+            progress(1.0)
+        return self.result
+
+    @property
+    def result(self) -> RunResult:
+        """The run's result so far (final once :attr:`done`)."""
+        if self._result is not None:
+            return self._result
+        outcomes = (
+            tuple(self.script.finish(self.time)) if self.done else tuple(self.script.outcomes)
+        )
+        if self.diverged:
+            status: Status = "diverged"
+        else:
+            status = "passed" if outcomes and all(o.passed for o in outcomes) else "failed"
+        result = RunResult(
+            level=self.level.level.name,
+            solver=self.controller.solver_name,
+            status=status,
+            steps=outcomes,
+            ticks=self.tick,
+            sim_time=self.time,
+            options={"tick_rate": self.level.world.tick_rate, "fps": self._fps},
+        )
+        if self.done:
+            self._result = result
+        return result
+
+    def snapshot(self) -> Snapshot:
+        """The state now, as plain arrays."""
+        target = self.target
+        joints = self.world.joint_positions()
+        angles = self.world.joint_angles()
+        return Snapshot(
+            time=self.time,
+            tick=self.tick,
+            joints=joints,
+            angles=angles,
+            world_angles=np.cumsum(angles) + self.world.skeleton.base_angle,
+            target=None if target is None else target.copy(),
+            step_index=self.script.step_index,
+            error=self._last.error,
+            solver_status=self._last.solver_status,
+            torque_limited=self._last.torque_limited.copy(),
+        )
+
+
+def run_level(level: Level, *, solver: str | None = None, record: bool = True) -> Simulation:
+    """Run ``level`` to the end and return the finished :class:`Simulation`.
+
+    >>> run_level  # doctest: +ELLIPSIS
+    <function run_level at ...>
+    """
+    sim = Simulation(level, solver=solver, record=record)
+    sim.run()
+    return sim
+
+
+def _scene(level: Level, world: World) -> Scene:
+    segments = [(*o.a, *o.b, o.radius) for o in level.obstacles if isinstance(o, SegmentObstacle)]
+    circles = [(*o.center, o.radius) for o in level.obstacles if isinstance(o, CircleObstacle)]
+    targets = [step.reach for step in level.script if hasattr(step, "reach")]
+    return Scene(
+        level_name=level.level.name,
+        segments=np.array(segments, dtype=float).reshape(-1, 5),
+        circles=np.array(circles, dtype=float).reshape(-1, 3),
+        link_widths=world.link_widths.copy(),
+        reach=world.skeleton.reach,
+        targets=np.array(targets, dtype=float).reshape(-1, 2),
+        bounds=level.world.bounds,
+        step_count=len(level.script),
+        fps=float(level.world.fps),
+    )
