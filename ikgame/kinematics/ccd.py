@@ -14,7 +14,7 @@ from typing import Final
 
 import numpy as np
 
-from ikgame.kinematics.skeleton import Skeleton, check_point, forward_kinematics
+from ikgame.kinematics.skeleton import Skeleton, check_angles, check_point
 from ikgame.kinematics.solver import Solution, SolveStatus
 
 __all__ = [
@@ -171,49 +171,72 @@ def ccd_iteration_limited(
     >>> float(angles[0])
     0.5
     """
-    if not skeleton.is_chain:
-        raise ValueError("CCD needs a serial chain (parents[i] == i - 1)")
-    tx, ty = float(target[0]), float(target[1])
-    arrival_dist_sqr = arrival_dist * arrival_dist
-    lengths = skeleton.lengths.tolist()
-    lower = skeleton.lower.tolist()
-    upper = skeleton.upper.tolist()
-    new = [float(a) for a in angles]
-    n = len(new)
+    chain = _Chain(skeleton)
+    status, new, _ = chain.iterate(
+        [float(a) for a in angles], float(target[0]), float(target[1]), arrival_dist**2
+    )
+    return status, np.array(new)
 
-    joint_x = [float(skeleton.base[0])]
-    joint_y = [float(skeleton.base[1])]
-    world_angle = skeleton.base_angle
-    for i in range(n):
-        world_angle += new[i]
-        joint_x.append(joint_x[i] + lengths[i] * math.cos(world_angle))
-        joint_y.append(joint_y[i] + lengths[i] * math.sin(world_angle))
 
-    end_x, end_y = joint_x[n], joint_y[n]
-    modified = False
-    for i in range(n - 1, -1, -1):
-        jx, jy = joint_x[i], joint_y[i]
-        cos_rot, sin_rot, rot, cur_to_end_mag = _rotation_toward(jx, jy, end_x, end_y, tx, ty)
-        wanted = new[i] + rot
-        if lower[i] == -math.inf and upper[i] == math.inf:
-            new[i] = wrap_angle(wanted)
-        else:
-            clamped = min(max(wanted, lower[i]), upper[i])
-            if clamped != wanted:
-                rot += clamped - wanted
-                cos_rot, sin_rot = math.cos(rot), math.sin(rot)
-            new[i] = clamped
-        cur_to_end_x = end_x - jx
-        cur_to_end_y = end_y - jy
-        end_x = jx + cos_rot * cur_to_end_x - sin_rot * cur_to_end_y
-        end_y = jy + sin_rot * cur_to_end_x + cos_rot * cur_to_end_y
-        dx = tx - end_x
-        dy = ty - end_y
-        if dx * dx + dy * dy <= arrival_dist_sqr:
-            return SolveStatus.SUCCESS, np.array(new)
-        if not modified and abs(rot) * cur_to_end_mag > TRIVIAL_ARC_LENGTH:
-            modified = True
-    return (SolveStatus.PROCESSING if modified else SolveStatus.FAILURE), np.array(new)
+class _Chain:
+    """A chain's arrays as Python floats: CCD walks joint by joint, where numpy's per-call
+    overhead would cost more than the arithmetic."""
+
+    def __init__(self, skeleton: Skeleton) -> None:
+        if not skeleton.is_chain:
+            raise ValueError("CCD needs a serial chain (parents[i] == i - 1)")
+        self.lengths = skeleton.lengths.tolist()
+        self.lower = skeleton.lower.tolist()
+        self.upper = skeleton.upper.tolist()
+        self.free = (~skeleton.limited).tolist()
+        self.base_x = float(skeleton.base[0])
+        self.base_y = float(skeleton.base[1])
+        self.base_angle = skeleton.base_angle
+
+    def joints(self, angles: list[float]) -> tuple[list[float], list[float]]:
+        """World x and y of every joint, then the end effector."""
+        xs = [self.base_x]
+        ys = [self.base_y]
+        world_angle = self.base_angle
+        for length, angle in zip(self.lengths, angles, strict=True):
+            world_angle += angle
+            xs.append(xs[-1] + length * math.cos(world_angle))
+            ys.append(ys[-1] + length * math.sin(world_angle))
+        return xs, ys
+
+    def iterate(
+        self, angles: list[float], tx: float, ty: float, arrival_dist_sqr: float
+    ) -> tuple[SolveStatus, list[float], float]:
+        """One limit-aware pass; returns the status, new angles and the squared end error."""
+        joint_x, joint_y = self.joints(angles)
+        new = list(angles)
+        end_x, end_y = joint_x[-1], joint_y[-1]
+        modified = False
+        for i in range(len(new) - 1, -1, -1):
+            jx, jy = joint_x[i], joint_y[i]
+            cos_rot, sin_rot, rot, cur_to_end_mag = _rotation_toward(jx, jy, end_x, end_y, tx, ty)
+            wanted = new[i] + rot
+            if self.free[i]:
+                new[i] = wrap_angle(wanted)
+            else:
+                clamped = min(max(wanted, self.lower[i]), self.upper[i])
+                if clamped != wanted:
+                    rot += clamped - wanted
+                    cos_rot, sin_rot = math.cos(rot), math.sin(rot)
+                new[i] = clamped
+            cur_to_end_x = end_x - jx
+            cur_to_end_y = end_y - jy
+            end_x = jx + cos_rot * cur_to_end_x - sin_rot * cur_to_end_y
+            end_y = jy + sin_rot * cur_to_end_x + cos_rot * cur_to_end_y
+            dx = tx - end_x
+            dy = ty - end_y
+            error_sqr = dx * dx + dy * dy
+            if error_sqr <= arrival_dist_sqr:
+                return SolveStatus.SUCCESS, new, error_sqr
+            if not modified and abs(rot) * cur_to_end_mag > TRIVIAL_ARC_LENGTH:
+                modified = True
+        status = SolveStatus.PROCESSING if modified else SolveStatus.FAILURE
+        return status, new, error_sqr
 
 
 def solve_ccd(
@@ -236,20 +259,15 @@ def solve_ccd(
     """
     if max_iterations < 1:
         raise ValueError(f"max_iterations must be >= 1, got {max_iterations}")
-    target = check_point(target)
+    tx, ty = (float(v) for v in check_point(target))
     tolerance = _check_arrival(tolerance)
-    current = skeleton.clamp(np.asarray(angles, dtype=float))
-    error = _end_error(skeleton, current, target)
-    if error <= tolerance:
-        return Solution(current, SolveStatus.SUCCESS, 0, error)
-    status = SolveStatus.PROCESSING
+    chain = _Chain(skeleton)
+    current = skeleton.clamp(check_angles(angles, skeleton.count)).tolist()
+    xs, ys = chain.joints(current)
+    error_sqr = (xs[-1] - tx) ** 2 + (ys[-1] - ty) ** 2
+    status = SolveStatus.SUCCESS if error_sqr <= tolerance * tolerance else SolveStatus.PROCESSING
     used = 0
     while used < max_iterations and status is SolveStatus.PROCESSING:
-        status, current = ccd_iteration_limited(skeleton, current, target, tolerance)
+        status, current, error_sqr = chain.iterate(current, tx, ty, tolerance * tolerance)
         used += 1
-    return Solution(current, status, used, _end_error(skeleton, current, target))
-
-
-def _end_error(skeleton: Skeleton, angles: np.ndarray, target: np.ndarray) -> float:
-    points, _ = forward_kinematics(skeleton, angles)
-    return float(np.hypot(*(points[-1] - target)))
+    return Solution(np.array(current), status, used, math.sqrt(error_sqr))
