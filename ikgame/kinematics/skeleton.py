@@ -77,13 +77,14 @@ class Skeleton:
     base_angle: float = 0.0
 
     def __post_init__(self) -> None:
-        lengths = np.asarray(self.lengths, dtype=float)
+        # Copies, so a caller's array (or a view of it) cannot change a validated skeleton.
+        lengths = np.array(self.lengths, dtype=float)
         n = lengths.shape[0] if lengths.ndim == 1 else 0
         if lengths.ndim != 1 or n == 0:
             raise ValueError(f"lengths must be a non-empty 1-D array, got shape {lengths.shape}")
         if not np.all(np.isfinite(lengths)) or np.any(lengths <= 0):
             raise ValueError(f"lengths must be finite and positive, got {lengths.tolist()}")
-        parents = np.asarray(self.parents, dtype=np.int64)
+        parents = np.array(self.parents, dtype=np.int64)
         if parents.shape != (n,):
             raise ValueError(f"parents must have shape ({n},), got shape {parents.shape}")
         if np.any(parents >= np.arange(n)) or np.any(parents < -1):
@@ -92,7 +93,7 @@ class Skeleton:
         upper = np.broadcast_to(np.asarray(self.upper, dtype=float), (n,)).copy()
         if np.any(np.isnan(lower)) or np.any(np.isnan(upper)) or np.any(lower > upper):
             raise ValueError("joint limits must satisfy lower <= upper (radians)")
-        base = check_point(self.base, "base")
+        base = check_point(self.base, "base").copy()
         if not np.isfinite(self.base_angle):
             raise ValueError("base_angle must be finite")
         for name, value in (
