@@ -172,9 +172,10 @@ def ccd_iteration_limited(
     0.5
     """
     chain = _Chain(skeleton)
-    status, new, _ = chain.iterate(
-        [float(a) for a in angles], float(target[0]), float(target[1]), arrival_dist**2
-    )
+    tx, ty = (float(v) for v in check_point(target))
+    arrival = _check_arrival(arrival_dist)
+    start = check_angles(angles, skeleton.count).tolist()
+    status, new, _ = chain.iterate(start, tx, ty, arrival * arrival)
     return status, np.array(new)
 
 
