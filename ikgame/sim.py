@@ -116,11 +116,10 @@ class Simulation:
         self._override: np.ndarray | None = None
         self._max_ticks = round(level.level.duration * level.world.tick_rate)
         self._fps = level.world.fps
+        self._tick_rate = level.world.tick_rate
         self._last = TickInfo(0, 0.0, "processing", 0, math.nan, np.zeros(self.world.count, bool))
         self._result: RunResult | None = None
         self.scene = _scene(level, self.world)
-        if record:
-            self.snapshots.append(self.snapshot())
 
     @property
     def time(self) -> float:
@@ -165,6 +164,9 @@ class Simulation:
         """Advance one tick and return its telemetry; a no-op once :attr:`done`."""
         if self.done:
             return self._last
+        # Frames are taken before the tick, at t = k / fps: a run of T seconds has T x fps frames.
+        if self.record and self.tick * self._fps >= len(self.snapshots) * self._tick_rate:
+            self.snapshots.append(self.snapshot())
         target = self.target
         command = self.controller.command(self.world.joint_angles(), target)
         self.world.set_rates(command.rates)
@@ -184,11 +186,6 @@ class Simulation:
             error,
             self.world.torque_limited(),
         )
-        if (
-            self.record
-            and self.tick * self._fps >= len(self.snapshots) * self.level.world.tick_rate
-        ):
-            self.snapshots.append(self.snapshot())
         return self._last
 
     def run(self, progress: Callable[[float], None] | None = None) -> RunResult:

@@ -1,0 +1,53 @@
+"""The controller: solver -> desired angles -> clamped motor rates."""
+
+import math
+
+import numpy as np
+import pytest
+
+from ikgame.control.controller import Controller, joint_error
+from ikgame.kinematics import Skeleton, forward_kinematics
+
+
+def test_free_joint_error_takes_the_short_way_round():
+    err = joint_error(np.array([math.pi - 0.1]), np.array([-math.pi + 0.1]), np.array([False]))
+    assert err[0] == pytest.approx(-0.2)
+
+
+def test_limited_joint_error_never_wraps_through_the_limit():
+    # Measured near +limit, desired near -limit: the way is back through the range, not round.
+    err = joint_error(np.array([-2.5]), np.array([2.5]), np.array([True]))
+    assert err[0] == pytest.approx(-5.0)
+
+
+def test_rates_are_gain_times_error_clamped_by_speed():
+    skeleton = Skeleton.chain([100.0, 100.0])
+    ctl = Controller(skeleton, "ccd", max_speed=np.array([0.5, 10.0]), gain=2.0)
+    target = forward_kinematics(skeleton, np.array([0.3, 0.2]))[0][-1]
+    command = ctl.command(np.zeros(2), target)
+    wanted = 2.0 * command.solution.angles
+    assert command.rates[0] == pytest.approx(np.clip(wanted[0], -0.5, 0.5))
+    assert command.rates[1] == pytest.approx(wanted[1])
+
+
+def test_desired_angles_respect_limits():
+    skeleton = Skeleton.chain([100.0, 100.0], limits=[(-0.2, 0.2), (0.0, 0.5)])
+    ctl = Controller(skeleton, "ccd", max_speed=np.full(2, 10.0))
+    command = ctl.command(np.zeros(2), np.array([-150.0, -50.0]))
+    assert np.all(command.solution.angles >= skeleton.lower - 1e-12)
+    assert np.all(command.solution.angles <= skeleton.upper + 1e-12)
+
+
+def test_without_a_target_the_chain_holds_its_pose():
+    ctl = Controller(Skeleton.chain([100.0]), "ccd", max_speed=np.array([5.0]))
+    first = ctl.command(np.array([0.4]), None)
+    assert first.rates.tolist() == [0.0]
+    # Gravity pulled it 0.1 rad down: the controller pushes back toward the held pose.
+    assert ctl.command(np.array([0.3]), None).rates[0] > 0
+
+
+def test_unknown_solver_and_bad_gain_are_value_errors():
+    with pytest.raises(ValueError, match="unknown solver"):
+        Controller(Skeleton.chain([1.0]), "magic", max_speed=np.ones(1))
+    with pytest.raises(ValueError, match="gain"):
+        Controller(Skeleton.chain([1.0]), "ccd", max_speed=np.ones(1), gain=-1.0)

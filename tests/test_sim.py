@@ -1,0 +1,125 @@
+"""The simulation end to end: settling, limits, unreachable targets, tick-rate independence."""
+
+import json
+import math
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from ikgame.level.library import DEFAULT_LEVEL
+from ikgame.level.loader import load_level
+from ikgame.sim import Simulation
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def test_reachable_target_settles_without_oscillating(make_level):
+    sim = Simulation(make_level(script=[{"reach": [150.0, 150.0], "hold": 1.0, "timeout": 5.0}]))
+    errors = []
+    while not sim.done:
+        errors.append(sim.step().error)
+    result = sim.result
+    assert result.status == "passed"
+    assert result.steps[0].final_error <= 6.0
+    # Once first within tolerance, the error never leaves it again (no overshoot and ring).
+    first_in = next(i for i, e in enumerate(errors) if e <= 6.0)
+    assert max(errors[first_in:]) <= 6.0
+
+
+def test_no_joint_passes_its_limit_by_more_than_physical_slack():
+    level = load_level(ROOT / "levels" / "03_elbow_limits.toml")
+    sim = Simulation(level, record=False)
+    lower, upper = sim.world.skeleton.lower, sim.world.skeleton.upper
+    slack = math.radians(2.0)
+    worst = 0.0
+    while not sim.done:
+        sim.step()
+        angles = sim.joint_angles()
+        worst = max(worst, float(np.max(lower - angles)), float(np.max(angles - upper)))
+    assert sim.result.status == "passed"
+    assert worst <= slack
+
+
+def test_unreachable_target_fails_and_the_arm_rests_pointing_at_it(make_level):
+    target = np.array([600.0, 300.0])
+    sim = Simulation(make_level(script=[{"reach": target.tolist(), "timeout": 3.0}]))
+    result = sim.run()
+    assert result.status == "failed"
+    assert result.steps[0].reached is False and result.steps[0].note == "timed out"
+    points = sim.joint_positions()
+    direction = points[-1] - points[0]
+    wanted = target - points[0]
+    cos = direction @ wanted / (np.linalg.norm(direction) * np.linalg.norm(wanted))
+    assert cos > math.cos(math.radians(3.0))
+    # Stretched and at rest, not spinning (a known complaint about CCD in other engines).
+    assert np.linalg.norm(direction) > 0.97 * sim.world.skeleton.reach
+    assert np.max(np.abs(sim.world.joint_velocities())) < 0.05
+
+
+def test_target_inside_an_obstacle_fails_without_blowing_up(make_level):
+    level = make_level(
+        obstacles=[{"kind": "circle", "center": [150.0, 150.0], "radius": 40.0}],
+        script=[{"reach": [150.0, 150.0], "timeout": 3.0}],
+    )
+    sim = Simulation(level)
+    result = sim.run()
+    assert result.status == "failed"
+    # The tip is stopped at the obstacle's surface, as close as it can get.
+    assert 30.0 <= result.steps[0].final_error <= 60.0
+
+
+@pytest.mark.parametrize("solver", ["ccd"])
+def test_tick_rate_independence(solver):
+    base = load_level(DEFAULT_LEVEL)
+    times = {}
+    for rate in (120, 240, 480):
+        level = base.model_copy(update={"world": base.world.model_copy(update={"tick_rate": rate})})
+        result = Simulation(level, solver=solver, record=False).run()
+        assert result.status == "passed", rate
+        times[rate] = np.array([s.time_to_reach for s in result.steps])
+    for rate in (120, 480):
+        assert np.all(np.abs(times[rate] - times[240]) <= 0.15 * times[240]), (rate, times)
+
+
+def test_runs_are_deterministic():
+    level = load_level(DEFAULT_LEVEL)
+    first = Simulation(level).run().as_dict()
+    second = Simulation(level).run().as_dict()
+    assert json.dumps(first) == json.dumps(second)
+
+
+def test_snapshots_are_recorded_at_the_level_fps(make_level):
+    sim = Simulation(make_level(level={"name": "t", "duration": 2.0}, script=[{"wait": 2.0}]))
+    sim.run()
+    times = [s.time for s in sim.snapshots]
+    assert len(times) == 2 * 30
+    assert np.allclose(np.diff(times), 1 / 30, atol=1 / 240)
+
+
+def test_target_from_code_overrides_the_script(make_level):
+    sim = Simulation(make_level(world={"gravity": [0.0, 0.0]}))
+    sim.target = (-120.0, 120.0)
+    for _ in range(480):
+        sim.step()
+    assert np.hypot(*(sim.joint_positions()[-1] - (-120.0, 120.0))) < 2.0
+    sim.target = None
+    assert sim.target.tolist() == [150.0, 150.0]
+    with pytest.raises(ValueError, match="finite"):
+        sim.target = (math.nan, 0.0)
+
+
+def test_a_blown_up_world_is_reported_as_diverged(make_level):
+    sim = Simulation(make_level())
+    sim.step()
+    sim.world.bodies[1].velocity = (1e12, 0.0)
+    result = sim.run()
+    assert result.status == "diverged"
+
+
+def test_readme_game_loop_example_runs():
+    readme = (ROOT / "README.md").read_text()
+    section = readme.split("## Use it from your game loop", 1)[1]
+    code = re.search(r"```python\n(.*?)```", section, re.S).group(1)
+    exec(compile(code, "README.md", "exec"), {})
