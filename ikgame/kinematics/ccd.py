@@ -269,6 +269,11 @@ def solve_ccd(
     status = SolveStatus.SUCCESS if error_sqr <= tolerance * tolerance else SolveStatus.PROCESSING
     used = 0
     while used < max_iterations and status is SolveStatus.PROCESSING:
-        status, current, error_sqr = chain.iterate(current, tx, ty, tolerance * tolerance)
+        status, current, _ = chain.iterate(current, tx, ty, tolerance * tolerance)
         used += 1
+    if used:
+        # The pass tracks the end by rotations, which drifts from forward kinematics by
+        # rounding; the reported error is the pose's own.
+        xs, ys = chain.joints(current)
+        error_sqr = (xs[-1] - tx) ** 2 + (ys[-1] - ty) ** 2
     return Solution(np.array(current), status, used, math.sqrt(error_sqr))
