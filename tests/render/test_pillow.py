@@ -1,0 +1,212 @@
+"""render_snapshot and PillowDrawOptions: pixels land where the camera says, deterministically."""
+
+from __future__ import annotations
+
+import numpy as np
+import pymunk
+import pytest
+from PIL import Image, ImageDraw
+
+from ikgame.render import pillow
+from ikgame.render.camera import Camera
+from ikgame.render.pillow import PillowDrawOptions, render_snapshot
+from ikgame.render.theme import load_theme
+from ikgame.snapshot import PropShape, Scene, Snapshot
+
+SIZE = (160, 90)
+LIGHT = load_theme("light")
+
+
+def _bare_scene(**overrides) -> Scene:
+    fields = dict(
+        level_name="bare",
+        segments=np.zeros((0, 5)),
+        circles=np.zeros((0, 3)),
+        link_widths=np.array([12.0]),
+        reach=100.0,
+        step_count=0,
+    )
+    fields.update(overrides)
+    return Scene(**fields)
+
+
+def _one_link(torque_limited=False, **overrides) -> Snapshot:
+    """A single horizontal link from (-50, 0) to (50, 0)."""
+    fields = dict(
+        time=0.0,
+        tick=0,
+        joints=np.array([[-50.0, 0.0], [50.0, 0.0]]),
+        angles=np.zeros(1),
+        world_angles=np.zeros(1),
+        torque_limited=np.array([torque_limited]),
+    )
+    fields.update(overrides)
+    return Snapshot(**fields)
+
+
+def _pixel(image: Image.Image, camera: Camera, world) -> tuple[int, int, int]:
+    x, y = camera.world_to_pixel([world])[0]
+    return image.getpixel((int(x), int(y)))
+
+
+def test_image_has_camera_size_and_is_not_blank(run):
+    scene, snaps = run(4)
+    camera = Camera.fit(scene, snaps, SIZE)
+    image = render_snapshot(scene, snaps[2], camera, LIGHT, trail=np.array([[0, 0], [10, 10.0]]))
+    assert image.mode == "RGB" and image.size == SIZE
+    colors = image.getcolors(SIZE[0] * SIZE[1])
+    assert len(colors) > 50, "anti-aliasing and the scene should give many colours"
+    background = max(colors)[1]
+    assert background == LIGHT.background
+
+
+def test_link_pixels_are_where_the_camera_says():
+    scene = _bare_scene()
+    camera = Camera((200, 100), center=(0.0, 30.0), scale=1.0)
+    image = render_snapshot(scene, _one_link(), camera, LIGHT, hud=False)
+    assert _pixel(image, camera, (0.0, 0.0)) == LIGHT.link
+    assert _pixel(image, camera, (-25.0, 2.0)) == LIGHT.link
+    # Well clear of the 12 px wide bar, above it and off the grid lines: background.
+    assert _pixel(image, camera, (13.0, 20.0)) == LIGHT.background
+
+
+def test_torque_limited_links_are_tinted():
+    scene = _bare_scene()
+    camera = Camera((200, 100), scale=1.0)
+    image = render_snapshot(scene, _one_link(torque_limited=True), camera, LIGHT, hud=False)
+    assert _pixel(image, camera, (0.0, 0.0)) == LIGHT.torque_limited
+
+
+def test_thin_links_keep_a_minimum_width():
+    scene = _bare_scene(link_widths=np.array([0.1]))
+    camera = Camera((200, 100), scale=1.0)
+    image = render_snapshot(scene, _one_link(), camera, LIGHT, hud=False)
+    column = np.asarray(image)[:, 100]
+    assert np.sum(np.any(column != LIGHT.background, axis=1)) >= pillow.MIN_LINK_WIDTH
+
+
+def test_target_trail_and_goal_are_drawn():
+    scene = _bare_scene(goals=np.array([[40.0, 20.0, 80.0, 45.0]]))
+    camera = Camera((200, 100), scale=1.0)
+    target = np.array([-60.0, 30.0])
+    snap = _one_link(target=target)
+    trail = np.array([[60.0, -40.0], [80.0, -40.0]])
+    image = render_snapshot(scene, snap, camera, LIGHT, trail=trail, hud=False)
+    centre = np.array(_pixel(image, camera, target))  # the crosshair's small centre dot
+    assert np.abs(centre - LIGHT.target).max() < 40
+    assert _pixel(image, camera, (75.0, -40.0)) != LIGHT.background  # the newest trail end
+    goal_fill = pillow._blend(LIGHT.background, LIGHT.goal, pillow.GOAL_FILL_ALPHA)
+    assert _pixel(image, camera, (60.0, 32.0)) == goal_fill
+
+
+def test_rendering_is_deterministic(run):
+    scene, snaps = run(5)
+    camera = Camera.fit(scene, snaps, SIZE)
+    first = render_snapshot(scene, snaps[3], camera, LIGHT, trail=np.zeros((3, 2))).tobytes()
+    pillow._static_layers.cache_clear()
+    second = render_snapshot(scene, snaps[3], camera, LIGHT, trail=np.zeros((3, 2))).tobytes()
+    assert first == second
+
+
+def test_redrawing_only_the_moving_parts_matches_a_full_frame(run):
+    """render_snapshot redraws and shrinks only the rectangle around the moving parts: nothing
+    may be clipped, so it matches drawing and shrinking the whole frame but for a few edge
+    pixels that Pillow's rasteriser rounds differently at shifted coordinates."""
+    scene, snaps = run(5)
+    camera = Camera.fit(scene, snaps, SIZE)
+    trail = np.array([s.joints[-1] for s in snaps[:4]])
+    fast = render_snapshot(scene, snaps[3], camera, LIGHT, trail=trail, hud=False)
+
+    big = camera.scaled(3)
+    full = pillow._static_layers(scene, camera, LIGHT, 3)[0].copy()
+    pillow._draw_dynamic(
+        pillow._Painter(ImageDraw.Draw(full), big, LIGHT, 3), scene, snaps[3], trail
+    )
+    full = full.resize(SIZE, Image.Resampling.LANCZOS)
+    diff = np.abs(np.asarray(fast, dtype=int) - np.asarray(full, dtype=int)).max(axis=2)
+    assert np.count_nonzero(diff) < 0.005 * diff.size
+    assert diff.mean() < 0.2
+
+
+def test_hud_changes_only_the_top_left_corner(run):
+    scene, snaps = run(3)
+    camera = Camera.fit(scene, snaps, (320, 180))
+    with_hud = np.asarray(render_snapshot(scene, snaps[1], camera, LIGHT))
+    without = np.asarray(render_snapshot(scene, snaps[1], camera, LIGHT, hud=False))
+    rows, cols = np.nonzero(np.any(with_hud != without, axis=2))
+    assert len(rows) > 0
+    assert rows.max() < 90 and cols.max() < 250
+
+
+def test_supersample_one_draws_without_shrinking(run):
+    scene, snaps = run(3)
+    camera = Camera.fit(scene, snaps, SIZE)
+    image = render_snapshot(scene, snaps[1], camera, LIGHT, supersample=1)
+    assert image.size == SIZE
+
+
+@pytest.mark.parametrize("value", [0, 9, 2.0, True])
+def test_bad_supersample_raises(run, value):
+    scene, snaps = run(2)
+    with pytest.raises(ValueError, match="supersample"):
+        render_snapshot(scene, snaps[0], Camera(SIZE), LIGHT, supersample=value)
+
+
+def test_mismatched_scene_and_snapshot_raise():
+    camera = Camera((100, 100))
+    with pytest.raises(ValueError, match="link widths"):
+        render_snapshot(_bare_scene(link_widths=np.ones(2)), _one_link(), camera, LIGHT)
+    with pytest.raises(ValueError, match="prop poses"):
+        render_snapshot(
+            _bare_scene(props=(PropShape("ball", (5.0, 5.0)),)), _one_link(), camera, LIGHT
+        )
+    bad_prop = _bare_scene(props=(PropShape("cone", (5.0, 5.0)),))
+    with pytest.raises(ValueError, match="unknown prop kind"):
+        render_snapshot(bad_prop, _one_link(props=np.zeros((1, 3))), camera, LIGHT)
+    with pytest.raises(ValueError, match="joints"):
+        render_snapshot(_bare_scene(), _one_link(joints=np.zeros((1, 2))), camera, LIGHT)
+
+
+def test_upcoming_targets_follow_the_current_one():
+    targets = np.array([[0.0, 0.0], [1.0, 1.0], [2.0, 2.0]])
+    scene = _bare_scene(targets=targets, step_count=4)  # a follow step among the reach steps
+    at_second = _one_link(target=targets[1], step_index=2)
+    assert pillow._upcoming(scene, at_second).tolist() == [[2.0, 2.0]]
+    following = _one_link(target=np.array([9.0, 9.0]), step_index=1)
+    assert len(pillow._upcoming(scene, following)) == 0
+    one_per_step = _bare_scene(targets=targets, step_count=3)
+    assert len(pillow._upcoming(one_per_step, _one_link(step_index=0))) == 2
+    done = _one_link(target=targets[0], step_index=4)
+    assert len(pillow._upcoming(scene, done)) == 0
+
+
+def test_pillow_draw_options_draws_a_pymunk_space():
+    space = pymunk.Space()
+    floor = pymunk.Segment(space.static_body, (-80, -30), (80, -30), 5)
+    body = pymunk.Body(1, 100)
+    body.position = (20, 10)
+    ball = pymunk.Circle(body, 12)
+    box = pymunk.Poly.create_box(body, (10, 10))
+    space.add(floor, body, ball, box)
+    image = Image.new("RGB", (200, 100), "white")
+    camera = Camera((200, 100), center=(0.0, 0.0), scale=1.0)
+    options = PillowDrawOptions(image, camera)
+    space.debug_draw(options)
+    white = (255, 255, 255)
+    assert _pixel(image, camera, (0.0, -30.0)) != white  # the floor
+    assert _pixel(image, camera, (20.0 - 8.0, 10.0 + 3.0)) != white  # inside the ball
+    assert _pixel(image, camera, (0.0, 30.0)) == white
+
+
+def test_pillow_draw_options_default_camera_is_y_up_from_the_bottom_left():
+    space = pymunk.Space()
+    space.add(pymunk.Segment(space.static_body, (10, 5), (90, 5), 2))
+    image = Image.new("RGB", (100, 50), "white")
+    space.debug_draw(PillowDrawOptions(image))
+    assert image.getpixel((50, 44)) != (255, 255, 255)  # 5 px above the bottom edge
+    assert image.getpixel((50, 5)) == (255, 255, 255)
+
+
+def test_pillow_draw_options_rejects_a_camera_of_another_size():
+    with pytest.raises(ValueError, match="camera size"):
+        PillowDrawOptions(Image.new("RGB", (10, 10)), Camera((20, 20)))
