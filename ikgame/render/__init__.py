@@ -1,0 +1,22 @@
+"""Rendering: a camera, colour themes, Pillow frames, and exports (PNG frames, GIF, APNG, contact
+sheet, baked motion)."""
+
+from ikgame.render.camera import Camera
+from ikgame.render.export import check_out_dir, export_run, motion_json, parse_size, trail_at
+from ikgame.render.pillow import PillowDrawOptions, render_snapshot, to_draw_coords
+from ikgame.render.theme import Theme, available_themes, load_theme
+
+__all__ = [
+    "Camera",
+    "PillowDrawOptions",
+    "Theme",
+    "available_themes",
+    "check_out_dir",
+    "export_run",
+    "load_theme",
+    "motion_json",
+    "parse_size",
+    "render_snapshot",
+    "to_draw_coords",
+    "trail_at",
+]

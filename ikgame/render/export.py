@@ -1,0 +1,751 @@
+"""Write a recorded run to disk: PNG frames, a looping GIF, an APNG, a contact sheet, and the baked
+motion as JSON keyframes.
+
+Frames are independent of each other (each frame's trail is read from the snapshot list), so they
+can be drawn in worker processes; every byte that ends up in a file comes from the same
+deterministic functions either way, so a parallel export is identical to a serial one. Files are
+written to a temporary name in their folder and renamed into place, so a reader never sees half a
+file, and an interrupted export leaves no stray temporaries. The GIF and APNG are streamed one
+frame at a time, so a long run does not hold its frames in memory.
+"""
+
+from __future__ import annotations
+
+import io
+import json
+import math
+import multiprocessing
+import os
+import re
+import struct
+import sys
+import uuid
+import zlib
+from collections import deque
+from collections.abc import Callable, Iterator, Sequence
+from concurrent.futures import Future, ProcessPoolExecutor
+from contextlib import ExitStack, contextmanager
+from dataclasses import dataclass
+from fractions import Fraction
+from functools import lru_cache
+from pathlib import Path
+from typing import IO, Any
+
+import numpy as np
+from PIL import GifImagePlugin, Image, ImageDraw, ImageFont
+from rich.console import Console
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
+
+from ikgame.render.camera import Camera
+from ikgame.render.pillow import render_snapshot
+from ikgame.render.theme import Theme, load_theme
+from ikgame.snapshot import Scene, Snapshot
+
+__all__ = ["check_out_dir", "export_run", "motion_json", "parse_size", "trail_at"]
+
+MIN_SIDE = 16  # px: below this the HUD and markers cannot fit
+MAX_SIDE = 3840  # px, either side
+MAX_PIXELS = 3840 * 2160  # a 4K frame; more is a typo or a hostile level, not a devlog GIF
+TRAIL_SECONDS = 1.5  # s of end-effector path drawn behind it
+GIF_MAX_FPS = 50.0  # browsers play GIF delays under 2 cs as 10 cs, so faster runs drop frames
+GIF_COLORS = 255  # palette entries for pixels; the 256th is the transparent "unchanged" index
+GIF_TRANSPARENT = 255
+GIF_FREQUENT = 64  # most common exact colours kept as they are: the flat fills never dither
+SHEET_THUMBS = 12
+SHEET_COLUMNS = 4
+SHEET_THUMB_WIDTH = 320  # px, at most
+CHUNK = 8  # frames per worker task: large enough to amortise the round trip, small to balance
+PARALLEL_MIN_FRAMES = 48  # shorter runs finish before worker processes would have started
+MAX_AUTO_WORKERS = 8
+_FRAME_NAME = re.compile(r"\d{6}\.png")
+_SIZE = re.compile(r"(-?\d+)\s*[xX]\s*(-?\d+)")
+_PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+
+
+# -- input checks --------------------------------------------------------------------------------
+
+
+def parse_size(text: str) -> tuple[int, int]:
+    """Parse ``"WIDTHxHEIGHT"`` into ``(width, height)``, within the export size limits.
+
+    >>> parse_size("960x540")
+    (960, 540)
+    """
+    match = _SIZE.fullmatch(text.strip()) if isinstance(text, str) else None
+    if match is None:
+        raise ValueError(f"size must be WIDTHxHEIGHT in pixels, like 960x540; got {text!r}")
+    return _check_export_size((int(match[1]), int(match[2])))
+
+
+def _check_export_size(size: object) -> tuple[int, int]:
+    try:
+        width, height = size  # type: ignore[misc]
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"size must be a pair (width, height), got {size!r}") from exc
+    if any(isinstance(v, bool) or not isinstance(v, int | np.integer) for v in (width, height)):
+        raise ValueError(f"size must be whole pixels (width, height), got {size!r}")
+    if not (
+        MIN_SIDE <= width <= MAX_SIDE
+        and MIN_SIDE <= height <= MAX_SIDE
+        and width * height <= MAX_PIXELS
+    ):
+        raise ValueError(
+            f"size {width}x{height} is out of range: each side must be {MIN_SIDE}..{MAX_SIDE} px "
+            f"and the frame at most {MAX_PIXELS} pixels (3840x2160)"
+        )
+    return int(width), int(height)
+
+
+def check_out_dir(path: str | os.PathLike[str], force: bool) -> Path:
+    """Return ``path`` as a Path if an export may write there, or raise ``ValueError``.
+
+    A missing or empty folder is fine; a folder with files in it only with ``force``.
+
+    >>> check_out_dir("runs/not-there-yet", force=False).name
+    'not-there-yet'
+    """
+    out = Path(path)
+    if out.exists() and not out.is_dir():
+        raise ValueError(f"output path {out} exists and is not a folder")
+    if out.is_dir() and not force and any(out.iterdir()):
+        raise ValueError(f"output folder {out} is not empty; use --force to overwrite its files")
+    return out
+
+
+def _check_run(scene: Scene, snapshots: Sequence[Snapshot]) -> None:
+    if not snapshots:
+        raise ValueError("no snapshots to export")
+    if not (math.isfinite(scene.fps) and scene.fps > 0):
+        raise ValueError(f"scene.fps must be a positive number, got {scene.fps!r}")
+
+
+# -- baked motion --------------------------------------------------------------------------------
+
+
+def motion_json(scene: Scene, snapshots: Sequence[Snapshot]) -> dict[str, Any]:
+    """The run as keyframes a game engine can import: one entry per recorded frame.
+
+    Each frame has every joint's local angle (radians and degrees), every link's world angle,
+    the world positions of the joints (base first, end effector last), the target and the
+    solver's status. Positions are world px with y up; NaN errors become null.
+
+    >>> scene = Scene("demo", np.zeros((0, 5)), np.zeros((0, 3)), np.full(1, 8.0), 100.0)
+    >>> snap = Snapshot(0.0, 0, np.array([[0.0, 0.0], [0.0, 100.0]]), np.array([1.5708]),
+    ...                 np.array([1.5708]))
+    >>> motion = motion_json(scene, [snap])
+    >>> motion["link_lengths"], motion["frames"][0]["angles_deg"]
+    ([100.0], [90.0002])
+    """
+    _check_run(scene, snapshots)
+    first = np.asarray(snapshots[0].joints, dtype=float)
+    lengths = np.linalg.norm(np.diff(first, axis=0), axis=1)
+    return {
+        "format": "ikgame-motion",
+        "version": 1,
+        "level": scene.level_name,
+        "fps": float(scene.fps),
+        "frame_count": len(snapshots),
+        "duration": _round(len(snapshots) / scene.fps, 6),
+        "units": {"length": "px", "angle": "rad, and deg in *_deg", "time": "s", "y_axis": "up"},
+        "conventions": {
+            "angles": "local joint angle of each link relative to its parent link, counter-clockwise",
+            "world_angles": "each link's direction relative to +x, counter-clockwise",
+            "joints": "world positions: the base, each following joint, then the end effector",
+        },
+        "link_count": len(lengths),
+        "link_lengths": [_round(v, 3) for v in lengths],
+        "link_widths": [_round(v, 3) for v in np.asarray(scene.link_widths, dtype=float)],
+        "frames": [_motion_frame(snap) for snap in snapshots],
+    }
+
+
+def _motion_frame(snap: Snapshot) -> dict[str, Any]:
+    angles = np.asarray(snap.angles, dtype=float)
+    error = float(snap.error)
+    return {
+        "time": _round(snap.time, 6),
+        "tick": int(snap.tick),
+        "step_index": int(snap.step_index),
+        "angles_rad": [_round(a, 6) for a in angles],
+        "angles_deg": [_round(a, 4) for a in np.degrees(angles)],
+        "world_angles_rad": [_round(a, 6) for a in np.asarray(snap.world_angles, dtype=float)],
+        "joints": [[_round(x, 3), _round(y, 3)] for x, y in np.asarray(snap.joints, dtype=float)],
+        "target": None if snap.target is None else [_round(v, 3) for v in snap.target],
+        "error": _round(error, 3) if math.isfinite(error) else None,
+        "solver_status": str(snap.solver_status),
+        "torque_limited": [bool(v) for v in np.asarray(snap.torque_limited, dtype=bool)],
+    }
+
+
+def _round(value: float, digits: int) -> float:
+    # +0.0 turns -0.0 into 0.0, which would otherwise print as "-0.0" in the keyframes.
+    return round(float(value), digits) + 0.0
+
+
+def _motion_bytes(motion: dict[str, Any]) -> bytes:
+    """The motion as JSON: an indented header, then one line per frame so runs diff well."""
+    header = {key: value for key, value in motion.items() if key != "frames"}
+    head = json.dumps(header, indent=2, allow_nan=False)
+    frames = ",\n    ".join(json.dumps(f, allow_nan=False) for f in motion["frames"])
+    return f'{head[:-2]},\n  "frames": [\n    {frames}\n  ]\n}}\n'.encode()
+
+
+# -- one frame -----------------------------------------------------------------------------------
+
+
+def trail_at(snapshots: Sequence[Snapshot], index: int, fps: float) -> np.ndarray:
+    """The end effector's path over the last ``TRAIL_SECONDS`` up to frame ``index``, (k, 2).
+
+    Read from the snapshot list alone, so any frame can be drawn without drawing the others.
+
+    >>> snaps = [Snapshot(i / 30, i, np.array([[0.0, 0.0], [i, 1.0]]), np.zeros(1), np.zeros(1))
+    ...          for i in range(3)]
+    >>> trail_at(snaps, 2, 30.0).tolist()
+    [[0.0, 1.0], [1.0, 1.0], [2.0, 1.0]]
+    """
+    start = max(0, index - max(1, round(TRAIL_SECONDS * fps)))
+    return np.array([snap.joints[-1] for snap in snapshots[start : index + 1]], dtype=float)
+
+
+@dataclass(frozen=True)
+class _Job:
+    """Everything needed to draw any frame of a run; sent once to each worker process."""
+
+    scene: Scene
+    snapshots: tuple[Snapshot, ...]
+    camera: Camera
+    theme: Theme
+    png: bool  # encode PNG bytes (frames or APNG)
+    gif_stride: int  # every gif_stride-th frame goes into the GIF; 0 without a GIF
+
+    def render(self, index: int, hud: bool = True) -> Image.Image:
+        trail = trail_at(self.snapshots, index, self.scene.fps)
+        return render_snapshot(
+            self.scene,
+            self.snapshots[index],
+            self.camera,
+            self.theme,
+            trail=trail,
+            hud=hud,
+        )
+
+    def payload(self, index: int, palette: bytes | None) -> tuple[bytes | None, bytes | None]:
+        """Frame ``index`` as PNG bytes and as GIF palette indices (None where not wanted)."""
+        image = self.render(index)
+        png = _png_bytes(image) if self.png else None
+        indices = None
+        if palette is not None and index % self.gif_stride == 0:
+            indices = _quantizer(palette).indices(image)
+        return png, indices
+
+
+def _png_bytes(image: Image.Image) -> bytes:
+    buffer = io.BytesIO()
+    image.save(buffer, format="PNG")
+    return buffer.getvalue()
+
+
+# -- worker processes ------------------------------------------------------------------------------
+
+_WORKER_JOB: _Job | None = None
+
+
+def _init_worker(job: _Job) -> None:
+    global _WORKER_JOB
+    _WORKER_JOB = job
+
+
+def _worker_payloads(
+    start: int, stop: int, palette: bytes | None
+) -> list[tuple[bytes | None, ...]]:
+    assert _WORKER_JOB is not None, "worker used without _init_worker"
+    return [_WORKER_JOB.payload(i, palette) for i in range(start, stop)]
+
+
+def _worker_rgb(index: int) -> bytes:
+    assert _WORKER_JOB is not None, "worker used without _init_worker"
+    return _WORKER_JOB.render(index).tobytes()
+
+
+def _worker_count(workers: int | None, frames: int) -> int:
+    if workers is None:
+        if frames < PARALLEL_MIN_FRAMES:
+            return 1
+        return max(1, min(os.cpu_count() or 1, MAX_AUTO_WORKERS))
+    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
+        raise ValueError(f"workers must be a positive int or None, got {workers!r}")
+    return workers
+
+
+@contextmanager
+def _pool(job: _Job, workers: int) -> Iterator[ProcessPoolExecutor | None]:
+    if workers == 1:
+        yield None
+        return
+    # "spawn", not fork: the progress bar runs a thread, and forking a threaded process can
+    # deadlock; spawn also behaves the same on every OS.
+    pool = ProcessPoolExecutor(
+        workers,
+        mp_context=multiprocessing.get_context("spawn"),
+        initializer=_init_worker,
+        initargs=(job,),
+    )
+    try:
+        yield pool
+    finally:
+        pool.shutdown(wait=True, cancel_futures=True)
+
+
+def _payloads(
+    job: _Job, pool: ProcessPoolExecutor | None, workers: int, palette: bytes | None
+) -> Iterator[tuple[bytes | None, bytes | None]]:
+    """Every frame's payload, in order, drawn here or by the pool."""
+    count = len(job.snapshots)
+    if pool is None:
+        for index in range(count):
+            yield job.payload(index, palette)
+        return
+    chunks = iter(range(0, count, CHUNK))
+    pending: deque[Future[list[tuple[bytes | None, ...]]]] = deque()
+
+    def submit() -> None:
+        start = next(chunks, None)
+        if start is not None:
+            pending.append(pool.submit(_worker_payloads, start, min(start + CHUNK, count), palette))
+
+    # A couple of chunks queued per worker keeps them busy while bounding frames held in memory.
+    for _ in range(2 * workers):
+        submit()
+    while pending:
+        results = pending.popleft().result()
+        submit()
+        yield from results
+
+
+def _sample_images(
+    job: _Job, pool: ProcessPoolExecutor | None, indices: Sequence[int]
+) -> list[Image.Image]:
+    if pool is None:
+        return [job.render(i) for i in indices]
+    return [Image.frombytes("RGB", job.camera.size, raw) for raw in pool.map(_worker_rgb, indices)]
+
+
+def _sample_indices(count: int, wanted: int) -> list[int]:
+    """Up to ``wanted`` evenly spaced frame indices, first and last included."""
+    return sorted({round(v) for v in np.linspace(0, count - 1, min(wanted, count))})
+
+
+# -- GIF -----------------------------------------------------------------------------------------
+
+
+def _build_palette(samples: Sequence[Image.Image], theme: Theme) -> bytes:
+    """One palette for the whole GIF, ``GIF_COLORS`` RGB entries, from a sample of frames.
+
+    The theme's colours and the samples' most common exact colours come first, so flat fills
+    map to themselves with no dithering; the rest of the entries adapt (median cut) to the
+    remaining pixels: anti-aliased edges, the trail's fade, text.
+    """
+    stacked = Image.fromarray(np.vstack([np.asarray(im.convert("RGB")) for im in samples]))
+    counts = stacked.getcolors(stacked.width * stacked.height) or []
+    counts.sort(key=lambda item: (-item[0], item[1]))
+    fixed = list(dict.fromkeys(theme.colors() + [rgb for _, rgb in counts[:GIF_FREQUENT]]))
+    fixed = fixed[:GIF_COLORS]
+    taken = set(fixed)
+    rest = [(n, rgb) for n, rgb in counts if rgb not in taken]
+    room = GIF_COLORS - len(fixed)
+    if len(rest) <= room:
+        adaptive = [rgb for _, rgb in rest]
+    else:
+        weights = np.array([n for n, _ in rest])
+        pixels = np.repeat(np.array([rgb for _, rgb in rest], dtype=np.uint8), weights, axis=0)
+        strip = Image.fromarray(pixels.reshape(1, -1, 3))
+        quantized = strip.quantize(room, method=Image.Quantize.MEDIANCUT, dither=Image.Dither.NONE)
+        flat = quantized.getpalette() or []
+        adaptive = [tuple(flat[i : i + 3]) for i in range(0, 3 * room, 3)]
+    colors = list(dict.fromkeys(fixed + adaptive))
+    # Pad by repeating the background: duplicates are harmless, the quantizer picks the first.
+    colors += [colors[0]] * (GIF_COLORS - len(colors))
+    return bytes(c for rgb in colors[:GIF_COLORS] for c in rgb)
+
+
+# Bit offsets of R, G, B in an RGBX pixel read as a native uint32.
+_RGBX_SHIFTS = (0, 8, 16) if sys.byteorder == "little" else (24, 16, 8)
+
+
+class _Quantizer:
+    """Maps RGB frames to palette indices: a colour in the palette to itself, any other to the
+    nearest entry, with no dithering.
+
+    Pillow's own palette mapping looks colours up on a coarse colour cube, so even a flat
+    background can land on a neighbouring entry; this looks up exact 24-bit colours instead, in
+    a table filled as colours first appear (frames reuse almost all of them).
+    """
+
+    _UNKNOWN = 0xFFFF
+
+    def __init__(self, palette: bytes) -> None:
+        self.colors = np.frombuffer(palette, dtype=np.uint8).reshape(-1, 3).astype(np.int32)
+        self.table = np.full(1 << 24, self._UNKNOWN, dtype=np.uint16)  # 32 MB
+
+    def indices(self, image: Image.Image) -> bytes:
+        # RGBX is Pillow's own layout: one uint32 per pixel, the X byte masked off.
+        packed = np.frombuffer(image.convert("RGB").tobytes("raw", "RGBX"), dtype=np.uint32)
+        packed = packed & 0xFFFFFF
+        found = self.table[packed]
+        missing = found == self._UNKNOWN
+        if missing.any():
+            new = np.unique(packed[missing])
+            self.table[new] = self._nearest(new)
+            found = self.table[packed]
+        return found.astype(np.uint8).tobytes()
+
+    def _nearest(self, packed: np.ndarray) -> np.ndarray:
+        # Weighted RGB distance (2, 4, 3): a cheap stand-in for perceived difference.
+        weights = np.array([2, 4, 3], dtype=np.int64)
+        out = np.empty(len(packed), dtype=np.uint16)
+        for start in range(0, len(packed), 4096):
+            block = packed[start : start + 4096].astype(np.int64)
+            rgb = np.stack([block >> shift & 255 for shift in _RGBX_SHIFTS], axis=1)
+            diff = rgb[:, None, :] - self.colors[None, :, :]
+            out[start : start + 4096] = np.argmin((diff * diff * weights).sum(axis=2), axis=1)
+        return out
+
+
+@lru_cache(maxsize=1)
+def _quantizer(palette: bytes) -> _Quantizer:
+    """One quantizer per palette and process, so its table fills once per export."""
+    return _Quantizer(palette)
+
+
+def _gif_durations(frames: int, fps: float, stride: int) -> list[int]:
+    """Per-frame GIF delays in ms, each a whole number of centiseconds (the GIF unit).
+
+    Each delay is the gap between rounded frame times, so delays alternate (30 fps: 30, 40,
+    30 ms ...) and the total never drifts from the run's length by more than half a centisecond.
+    """
+    edges = [math.floor(k * stride * 100 / fps + 0.5) for k in range(frames + 1)]
+    return [10 * (b - a) for a, b in zip(edges[:-1], edges[1:], strict=True)]
+
+
+class _GifWriter:
+    """Streams a looping GIF: one global palette, and each frame after the first stored as the
+    rectangle that changed, unchanged pixels transparent (they compress to almost nothing)."""
+
+    def __init__(self, fp: IO[bytes], size: tuple[int, int], palette: bytes) -> None:
+        self.fp = fp
+        self.size = size
+        self.palette = palette + palette[:3]  # the transparent slot; its colour never shows
+        self.previous: np.ndarray | None = None
+        width, height = size
+        # Logical screen: 0xF7 = global colour table of 256 entries, 8 bits per primary.
+        fp.write(b"GIF89a" + struct.pack("<HHBBB", width, height, 0xF7, 0, 0) + self.palette)
+        # NETSCAPE2.0 application extension: loop count 0 = forever.
+        fp.write(b"!\xff\x0bNETSCAPE2.0\x03\x01" + struct.pack("<H", 0) + b"\x00")
+
+    def add(self, indices: bytes, duration_ms: int) -> None:
+        width, height = self.size
+        frame = np.frombuffer(indices, dtype=np.uint8).reshape(height, width)
+        # Disposal 1 (leave in place): each frame draws over the previous one.
+        params: dict[str, int] = {"duration": duration_ms, "disposal": 1}
+        if self.previous is None:
+            region, offset = frame, (0, 0)
+        else:
+            changed = frame != self.previous
+            rows, cols = np.flatnonzero(changed.any(axis=1)), np.flatnonzero(changed.any(axis=0))
+            if rows.size == 0:
+                # An unchanged frame still takes its time: one transparent pixel.
+                region, offset = np.full((1, 1), GIF_TRANSPARENT, dtype=np.uint8), (0, 0)
+            else:
+                y0, y1, x0, x1 = rows[0], rows[-1] + 1, cols[0], cols[-1] + 1
+                region = frame[y0:y1, x0:x1].copy()
+                region[~changed[y0:y1, x0:x1]] = GIF_TRANSPARENT
+                offset = (int(x0), int(y0))
+            params["transparency"] = GIF_TRANSPARENT
+        image = Image.frombytes("P", (region.shape[1], region.shape[0]), region.tobytes())
+        image.putpalette(self.palette)
+        for block in GifImagePlugin.getdata(image, offset, **params):
+            self.fp.write(block)
+        self.previous = frame
+
+    def close(self) -> None:
+        self.fp.write(b";")
+
+
+# -- APNG ----------------------------------------------------------------------------------------
+
+
+def _png_chunks(data: bytes) -> Iterator[tuple[bytes, bytes]]:
+    if not data.startswith(_PNG_SIGNATURE):
+        raise ValueError("not a PNG stream")
+    pos = len(_PNG_SIGNATURE)
+    while pos < len(data):
+        (length,) = struct.unpack(">I", data[pos : pos + 4])
+        kind = data[pos + 4 : pos + 8]
+        yield kind, data[pos + 8 : pos + 8 + length]
+        pos += 12 + length
+
+
+def _chunk(kind: bytes, body: bytes) -> bytes:
+    return struct.pack(">I", len(body)) + kind + body + struct.pack(">I", zlib.crc32(kind + body))
+
+
+class _ApngWriter:
+    """Streams an APNG from already-encoded PNG frames: each frame's image data is reused as is
+    (IDAT for the first frame, fdAT for the others), so nothing is encoded twice."""
+
+    def __init__(self, fp: IO[bytes], frames: int, size: tuple[int, int], fps: float) -> None:
+        self.fp = fp
+        self.frames = frames
+        self.size = size
+        delay = 1 / Fraction(fps).limit_denominator(1000)
+        if delay.numerator > 0xFFFF or delay.denominator > 0xFFFF:
+            raise ValueError(f"fps {fps} cannot be written as an APNG frame delay")
+        self.delay = delay
+        self.sequence = 0
+        self.written = 0
+        fp.write(_PNG_SIGNATURE)
+
+    def add(self, png: bytes) -> None:
+        width, height = self.size
+        # fcTL: sequence, size, offset 0,0, delay, dispose op 0 (none), blend op 0 (source).
+        control = struct.pack(
+            ">IIIIIHHBB",
+            self.sequence,
+            width,
+            height,
+            0,
+            0,
+            self.delay.numerator,
+            self.delay.denominator,
+            0,
+            0,
+        )
+        self.sequence += 1
+        first = self.written == 0
+        control_written = False
+        for kind, body in _png_chunks(png):
+            if kind == b"IEND":
+                break
+            if kind == b"IDAT":
+                if not control_written:
+                    self.fp.write(_chunk(b"fcTL", control))
+                    control_written = True
+                if first:
+                    self.fp.write(_chunk(b"IDAT", body))
+                else:
+                    self.fp.write(_chunk(b"fdAT", struct.pack(">I", self.sequence) + body))
+                    self.sequence += 1
+            elif first:
+                self.fp.write(_chunk(kind, body))
+                if kind == b"IHDR":
+                    # acTL: frame count, plays 0 = loop forever; it must precede any IDAT.
+                    self.fp.write(_chunk(b"acTL", struct.pack(">II", self.frames, 0)))
+        self.written += 1
+
+    def close(self) -> None:
+        if self.written != self.frames:
+            raise ValueError(f"APNG announced {self.frames} frames but got {self.written}")
+        self.fp.write(_chunk(b"IEND", b""))
+
+
+# -- contact sheet -------------------------------------------------------------------------------
+
+
+def _contact_sheet(job: _Job, indices: Sequence[int]) -> Image.Image:
+    """Evenly spaced frames in a grid, each labelled with its time, under a title line."""
+    theme, scene = job.theme, job.scene
+    width, height = job.camera.size
+    tw = min(width, SHEET_THUMB_WIDTH)
+    th = max(1, round(height * tw / width))
+    columns = min(SHEET_COLUMNS, len(indices))
+    rows = math.ceil(len(indices) / columns)
+    gap = max(6, tw // 24)
+    label = max(10, tw // 22)  # font size, px
+    title = round(label * 1.4)
+    cell_h = th + round(label * 1.8)
+    sheet_w = columns * tw + (columns + 1) * gap
+    top = gap + round(title * 1.6)
+    sheet = Image.new("RGB", (sheet_w, top + rows * (cell_h + gap)), theme.background)
+    draw = ImageDraw.Draw(sheet)
+    duration = len(job.snapshots) / scene.fps
+    heading = f"{scene.level_name}  ·  {duration:.2f} s  ·  {len(job.snapshots)} frames"
+    draw.text((gap, gap), heading, fill=theme.hud_text, font=ImageFont.load_default(size=title))
+    font = ImageFont.load_default(size=label)
+    for k, index in enumerate(indices):
+        x = gap + (k % columns) * (tw + gap)
+        y = top + (k // columns) * (cell_h + gap)
+        # Shrunk from a full frame rather than drawn small: line widths and markers keep the
+        # proportions of the real frames, so the sheet reads as their miniature.
+        thumb = job.render(index, hud=False).resize((tw, th), Image.Resampling.LANCZOS)
+        sheet.paste(thumb, (x, y))
+        draw.rectangle((x - 1, y - 1, x + tw, y + th), outline=theme.hud_muted)
+        caption = f"t = {job.snapshots[index].time:.2f} s"
+        draw.text(
+            (x + tw / 2, y + th + label * 0.4), caption, fill=theme.hud_text, font=font, anchor="ma"
+        )
+    return sheet
+
+
+# -- files ---------------------------------------------------------------------------------------
+
+
+@contextmanager
+def _atomic_open(path: Path) -> Iterator[IO[bytes]]:
+    """A file object whose contents appear at ``path`` only once the block ends without error."""
+    temp = path.with_name(f".{path.name}.{uuid.uuid4().hex[:12]}.tmp")
+    # os.open with 0o666 lets the umask decide the mode, as for any other new file (mkstemp
+    # would leave every export readable by its owner only).
+    fd = os.open(temp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_BINARY", 0), 0o666)
+    try:
+        with os.fdopen(fd, "wb") as fp:
+            yield fp
+        os.replace(temp, path)
+    except BaseException:
+        temp.unlink(missing_ok=True)
+        raise
+
+
+def _atomic_write(path: Path, data: bytes) -> Path:
+    with _atomic_open(path) as fp:
+        fp.write(data)
+    return path
+
+
+@contextmanager
+def _progress(enabled: bool, total: int) -> Iterator[Callable[[], None]]:
+    """A rich progress bar on stderr, or a no-op; yields the function that advances it."""
+    if not enabled:
+        yield lambda: None
+        return
+    columns = (TextColumn("rendering"), BarColumn(), MofNCompleteColumn(), TimeRemainingColumn())
+    with Progress(*columns, console=Console(stderr=True)) as bar:
+        task = bar.add_task("frames", total=total)
+        yield lambda: bar.advance(task)
+
+
+def export_run(
+    out_dir: str | os.PathLike[str],
+    scene: Scene,
+    snapshots: Sequence[Snapshot],
+    *,
+    size: tuple[int, int] = (960, 540),
+    theme: str | os.PathLike[str] | Theme = "light",
+    frames: bool = True,
+    gif: bool = True,
+    apng: bool = False,
+    sheet: bool = False,
+    motion: bool = True,
+    workers: int | None = None,
+    progress: bool = True,
+) -> list[Path]:
+    """Write a run's files into ``out_dir`` (created if missing) and return their paths.
+
+    ``frames/000000.png``... one per snapshot; ``run.gif`` looping, with one shared adaptive
+    palette and delays that add up to the run's length (runs above 50 fps keep every 2nd, 3rd...
+    frame, as browsers slow faster GIFs down); ``run.png`` an APNG at the exact frame rate;
+    ``sheet.png`` a contact sheet of about 12 frames; ``motion.json`` (see :func:`motion_json`).
+    ``workers`` processes draw the frames (None: one per CPU for long runs, else 1); the files
+    are the same byte for byte whatever the count. Frame files left from an earlier, longer run
+    are removed so ``frames/`` holds this run only. Check ``out_dir`` first with
+    :func:`check_out_dir`.
+
+    >>> import tempfile
+    >>> scene = Scene("demo", np.zeros((0, 5)), np.zeros((0, 3)), np.full(1, 8.0), 100.0)
+    >>> snaps = [Snapshot(0.0, 0, np.array([[0.0, 0.0], [0.0, 100.0]]), np.zeros(1), np.zeros(1))]
+    >>> with tempfile.TemporaryDirectory() as out:
+    ...     [p.name for p in export_run(out, scene, snaps, size=(64, 48), progress=False)]
+    ['000000.png', 'run.gif', 'motion.json']
+    """
+    snapshots = tuple(snapshots)
+    _check_run(scene, snapshots)
+    size = _check_export_size(size)
+    resolved_theme = theme if isinstance(theme, Theme) else load_theme(theme)
+    workers = _worker_count(workers, len(snapshots))
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    stride = math.ceil(scene.fps / GIF_MAX_FPS - 1e-9) if gif else 0
+    job = _Job(
+        scene=scene,
+        snapshots=snapshots,
+        camera=Camera.fit(scene, snapshots, size),
+        theme=resolved_theme,
+        png=frames or apng,
+        gif_stride=stride,
+    )
+    samples = _sample_indices(len(snapshots), SHEET_THUMBS)
+    show_progress = progress and sys.stderr.isatty()
+    try:
+        written = _write_frames(out, job, workers, samples, frames, gif, apng, show_progress)
+    finally:
+        # The colour table is 32 MB: keep it no longer than the export that needed it.
+        _quantizer.cache_clear()
+    if sheet:
+        written.append(_atomic_write(out / "sheet.png", _png_bytes(_contact_sheet(job, samples))))
+    if motion:
+        data = _motion_bytes(motion_json(scene, snapshots))
+        written.append(_atomic_write(out / "motion.json", data))
+    return written
+
+
+def _write_frames(
+    out: Path,
+    job: _Job,
+    workers: int,
+    samples: Sequence[int],
+    frames: bool,
+    gif: bool,
+    apng: bool,
+    progress: bool,
+) -> list[Path]:
+    """Draw every frame once and stream it to the PNG frames, the GIF and the APNG."""
+    count = len(job.snapshots)
+    size = job.camera.size
+    frame_paths: list[Path] = []
+    animations: list[Path] = []
+    frames_dir = out / "frames"
+    if frames:
+        frames_dir.mkdir(exist_ok=True)
+    with (
+        _pool(job, workers) as pool,
+        _progress(progress, count) as advance,
+        ExitStack() as files,
+    ):
+        palette = None
+        gif_writer = apng_writer = None
+        if gif:
+            palette = _build_palette(_sample_images(job, pool, samples), job.theme)
+            animations.append(out / "run.gif")
+            gif_writer = _GifWriter(
+                files.enter_context(_atomic_open(animations[-1])), size, palette
+            )
+            durations = _gif_durations(
+                math.ceil(count / job.gif_stride), job.scene.fps, job.gif_stride
+            )
+        if apng:
+            animations.append(out / "run.png")
+            apng_file = files.enter_context(_atomic_open(animations[-1]))
+            apng_writer = _ApngWriter(apng_file, count, size, job.scene.fps)
+        for index, (png, indices) in enumerate(_payloads(job, pool, workers, palette)):
+            if frames:
+                assert png is not None
+                frame_paths.append(_atomic_write(frames_dir / f"{index:06d}.png", png))
+            if gif_writer is not None and indices is not None:
+                gif_writer.add(indices, durations[index // job.gif_stride])
+            if apng_writer is not None:
+                assert png is not None
+                apng_writer.add(png)
+            advance()
+        # Trailers last, inside the block: the atomic files are renamed into place on its exit.
+        if gif_writer is not None:
+            gif_writer.close()
+        if apng_writer is not None:
+            apng_writer.close()
+    if frames:
+        _remove_stale_frames(frames_dir, count)
+    return frame_paths + animations
+
+
+def _remove_stale_frames(frames_dir: Path, count: int) -> None:
+    for path in frames_dir.iterdir():
+        if _FRAME_NAME.fullmatch(path.name) and int(path.stem) >= count:
+            path.unlink()

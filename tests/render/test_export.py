@@ -1,0 +1,252 @@
+"""export_run and friends: the files a run leaves on disk, and the checks on their inputs."""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import json
+import math
+import os
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from ikgame.render import export
+from ikgame.render.export import check_out_dir, export_run, motion_json, parse_size
+from ikgame.render.theme import load_theme
+
+SIZE = (160, 90)
+
+
+def _export(out, scene, snaps, **kwargs):
+    options = dict(size=SIZE, progress=False, workers=1) | kwargs
+    return export_run(out, scene, snaps, **options)
+
+
+def _digests(folder) -> dict[str, str]:
+    return {
+        str(p.relative_to(folder)): hashlib.sha256(p.read_bytes()).hexdigest()
+        for p in sorted(folder.rglob("*"))
+        if p.is_file()
+    }
+
+
+def test_frames_are_numbered_pngs_one_per_snapshot(tmp_path, run):
+    scene, snaps = run(5)
+    written = _export(tmp_path, scene, snaps, gif=False, motion=False)
+    names = sorted(p.name for p in (tmp_path / "frames").iterdir())
+    assert names == [f"{i:06d}.png" for i in range(5)]
+    assert written == [tmp_path / "frames" / name for name in names]
+    with Image.open(tmp_path / "frames" / "000003.png") as image:
+        assert image.format == "PNG" and image.size == SIZE and image.mode == "RGB"
+
+
+def test_gif_has_every_frame_right_durations_and_loops(tmp_path, run):
+    scene, snaps = run(7)
+    _export(tmp_path, scene, snaps)
+    with Image.open(tmp_path / "run.gif") as gif:
+        assert gif.n_frames == 7
+        assert gif.info["loop"] == 0
+        durations = []
+        for k in range(gif.n_frames):
+            gif.seek(k)
+            durations.append(gif.info["duration"])
+            decoded = np.asarray(gif.convert("RGB"), dtype=int)
+            with Image.open(tmp_path / "frames" / f"{k:06d}.png") as png:
+                exact = np.asarray(png.convert("RGB"), dtype=int)
+            # One shared palette, no dithering: flat colours survive exactly, edges nearly.
+            assert decoded[0, -1].tolist() == list(load_theme("light").background)
+            assert np.mean(np.all(decoded == exact, axis=2)) > 0.8
+            assert np.abs(decoded - exact).mean() < 1.5
+    assert durations == [30, 40, 30, 30, 40, 30, 30]
+    assert sum(durations) == pytest.approx(7 / scene.fps * 1000, abs=5)
+
+
+def test_gif_durations_add_up_to_the_run():
+    for fps in (24.0, 25.0, 30.0, 29.97, 48.0):
+        durations = export._gif_durations(1000, fps, 1)
+        assert all(d % 10 == 0 and d >= 20 for d in durations)
+        assert sum(durations) == pytest.approx(1000 / fps * 1000, abs=5)
+
+
+def test_fast_runs_keep_every_other_frame_in_the_gif(tmp_path, run):
+    scene, snaps = run(12, fps=60.0)
+    _export(tmp_path, scene, snaps, frames=False, motion=False)
+    with Image.open(tmp_path / "run.gif") as gif:
+        assert gif.n_frames == 6
+        durations = []
+        for k in range(gif.n_frames):
+            gif.seek(k)
+            durations.append(gif.info["duration"])
+    assert durations == [30, 40, 30, 30, 40, 30]  # 12 frames at 60 fps: 200 ms
+
+
+def test_unchanged_frames_keep_their_time_in_the_gif(tmp_path, run):
+    scene, snaps = run(3)
+    still = [snaps[0]] * 3
+    _export(tmp_path, scene, still, frames=False, motion=False)
+    with Image.open(tmp_path / "run.gif") as gif:
+        assert gif.n_frames == 3
+
+
+def test_apng_frames_match_the_png_frames(tmp_path, run):
+    scene, snaps = run(4)
+    _export(tmp_path, scene, snaps, gif=False, apng=True)
+    with Image.open(tmp_path / "run.png") as apng:
+        assert apng.format == "PNG" and apng.is_animated and apng.n_frames == 4
+        assert apng.info["loop"] == 0
+        for k in range(4):
+            apng.seek(k)
+            assert apng.info["duration"] == pytest.approx(1000 / 30)
+            with Image.open(tmp_path / "frames" / f"{k:06d}.png") as png:
+                assert apng.convert("RGB").tobytes() == png.convert("RGB").tobytes()
+
+
+def test_apng_without_frames_on_disk(tmp_path, run):
+    scene, snaps = run(3)
+    written = _export(tmp_path, scene, snaps, frames=False, gif=False, apng=True, motion=False)
+    assert [p.name for p in written] == ["run.png"]
+    assert not (tmp_path / "frames").exists()
+
+
+def test_contact_sheet_is_a_grid_of_evenly_spaced_frames(tmp_path, run):
+    scene, snaps = run(30)
+    written = _export(tmp_path, scene, snaps, frames=False, gif=False, motion=False, sheet=True)
+    assert [p.name for p in written] == ["sheet.png"]
+    assert export._sample_indices(30, 12) == [0, 3, 5, 8, 11, 13, 16, 18, 21, 24, 26, 29]
+    assert export._sample_indices(5, 12) == [0, 1, 2, 3, 4]
+    with Image.open(tmp_path / "sheet.png") as sheet:
+        # 4 columns of 160 px frames plus gaps; 3 rows under a title.
+        assert 4 * SIZE[0] < sheet.width < 4 * SIZE[0] + 100
+        assert 3 * SIZE[1] < sheet.height
+
+
+def test_motion_json_holds_every_frame(tmp_path, run):
+    scene, snaps = run(4)
+    _export(tmp_path, scene, snaps, frames=False, gif=False)
+    data = json.loads((tmp_path / "motion.json").read_text())
+    assert data == json.loads(json.dumps(motion_json(scene, snaps)))
+    assert data["level"] == "Synthetic" and data["fps"] == 30.0
+    assert data["frame_count"] == 4 and len(data["frames"]) == 4
+    assert data["link_lengths"] == pytest.approx([40.0, 40.0, 40.0])
+    frame = data["frames"][2]
+    snap = snaps[2]
+    assert frame["time"] == pytest.approx(snap.time, abs=1e-6)
+    assert frame["angles_rad"] == pytest.approx(snap.angles.tolist(), abs=1e-6)
+    assert frame["angles_deg"] == pytest.approx(np.degrees(snap.angles).tolist(), abs=1e-4)
+    np.testing.assert_allclose(frame["joints"], snap.joints, atol=1e-3)
+    assert frame["target"] == pytest.approx(snap.target.tolist())
+    assert frame["solver_status"] == snap.solver_status
+    assert frame["torque_limited"] == snap.torque_limited.tolist()
+
+
+def test_motion_json_writes_missing_values_as_null(run):
+    scene, snaps = run(2, targets=np.zeros((0, 2)))
+    frame = motion_json(scene, snaps)["frames"][0]
+    assert frame["target"] is None and frame["error"] is None
+
+
+def test_writes_are_atomic_and_leave_no_temporaries(tmp_path, run):
+    scene, snaps = run(4)
+    _export(tmp_path, scene, snaps, apng=True, sheet=True)
+    leftovers = [p for p in tmp_path.rglob("*") if p.name.startswith(".") or p.suffix == ".tmp"]
+    assert leftovers == []
+    umask = os.umask(0)
+    os.umask(umask)
+    assert (tmp_path / "run.gif").stat().st_mode & 0o777 == 0o666 & ~umask
+
+
+def test_a_failed_export_leaves_no_partial_files(tmp_path, run):
+    scene, snaps = run(4)
+    broken = snaps[:2] + [dataclasses.replace(snaps[2], joints=np.zeros((1, 2)))]
+    with pytest.raises(ValueError, match="joints"):
+        _export(tmp_path, scene, broken, apng=True)
+    names = {p.name for p in tmp_path.rglob("*")}
+    assert not names & {"run.gif", "run.png", "motion.json"}
+    assert not [name for name in names if name.endswith(".tmp")]
+
+
+def test_re_export_removes_frames_of_a_longer_earlier_run(tmp_path, run):
+    scene, snaps = run(5)
+    _export(tmp_path, scene, snaps, gif=False, motion=False)
+    (tmp_path / "frames" / "notes.txt").write_text("mine")
+    _export(tmp_path, scene, snaps[:2], gif=False, motion=False)
+    names = sorted(p.name for p in (tmp_path / "frames").iterdir())
+    assert names == ["000000.png", "000001.png", "notes.txt"]
+
+
+def test_check_out_dir_refuses_a_non_empty_folder_unless_forced(tmp_path):
+    assert check_out_dir(tmp_path / "new", force=False) == tmp_path / "new"
+    assert check_out_dir(tmp_path, force=False) == tmp_path
+    (tmp_path / "old.png").write_bytes(b"")
+    with pytest.raises(ValueError, match="is not empty"):
+        check_out_dir(tmp_path, force=False)
+    assert check_out_dir(tmp_path, force=True) == tmp_path
+    with pytest.raises(ValueError, match="not a folder"):
+        check_out_dir(tmp_path / "old.png", force=True)
+
+
+def test_parse_size_accepts_sizes_in_range():
+    assert parse_size("960x540") == (960, 540)
+    assert parse_size(" 1080X1920 ") == (1080, 1920)
+    assert parse_size("3840x2160") == (3840, 2160)
+    assert parse_size("16x16") == (16, 16)
+
+
+@pytest.mark.parametrize(
+    "text, message",
+    [
+        ("0x0", "out of range"),
+        ("-5x3", "out of range"),
+        ("15x100", "out of range"),
+        ("3841x100", "out of range"),
+        ("3840x3840", "out of range"),
+        ("abc", "WIDTHxHEIGHT"),
+        ("960x", "WIDTHxHEIGHT"),
+        ("960x540x3", "WIDTHxHEIGHT"),
+        ("9.5x4", "WIDTHxHEIGHT"),
+        ("", "WIDTHxHEIGHT"),
+    ],
+)
+def test_parse_size_rejects_bad_sizes(text, message):
+    with pytest.raises(ValueError, match=message):
+        parse_size(text)
+
+
+def test_bad_export_arguments_raise(tmp_path, run):
+    scene, snaps = run(2)
+    with pytest.raises(ValueError, match=r"^unknown theme 'x'; available: dark, light$"):
+        _export(tmp_path, scene, snaps, theme="x")
+    with pytest.raises(ValueError, match="out of range"):
+        _export(tmp_path, scene, snaps, size=(8, 8))
+    with pytest.raises(ValueError, match="workers"):
+        _export(tmp_path, scene, snaps, workers=0)
+    with pytest.raises(ValueError, match="no snapshots"):
+        _export(tmp_path, scene, [])
+    with pytest.raises(ValueError, match="fps"):
+        _export(tmp_path, dataclasses.replace(scene, fps=0.0), snaps)
+
+
+def test_progress_is_silent_when_stderr_is_not_a_terminal(tmp_path, run, capsys):
+    scene, snaps = run(2)
+    export_run(tmp_path, scene, snaps, size=SIZE, workers=1, progress=True)
+    assert capsys.readouterr().err == ""
+
+
+def test_parallel_export_is_byte_identical_to_serial(tmp_path, run):
+    scene, snaps = run(2 * export.CHUNK + 3)
+    options = dict(apng=True, sheet=True)
+    _export(tmp_path / "serial", scene, snaps, workers=1, **options)
+    _export(tmp_path / "parallel", scene, snaps, workers=2, **options)
+    serial, parallel = _digests(tmp_path / "serial"), _digests(tmp_path / "parallel")
+    assert len(serial) == len(snaps) + 4
+    assert serial == parallel
+
+
+def test_trail_covers_the_last_seconds(run):
+    scene, snaps = run(100)
+    trail = export.trail_at(snaps, 80, scene.fps)
+    assert len(trail) == math.ceil(export.TRAIL_SECONDS * scene.fps) + 1
+    np.testing.assert_array_equal(trail[-1], snaps[80].joints[-1])
+    assert len(export.trail_at(snaps, 0, scene.fps)) == 1
