@@ -2,8 +2,12 @@
 
 A :class:`Simulation` is what a game loop drives: call :meth:`Simulation.step` once per tick
 (or :meth:`Simulation.run` to the end), read or override the target from code, and read the
-pose. Each tick is a short sequence of named steps: target, solve, command motors, step the
-world, observe. Snapshots (plain arrays) are recorded at the level's fps for the renderer.
+pose. Each tick is a short sequence of named steps: apply the script's changes, target, solve,
+command motors, step the world, observe. Snapshots (plain arrays) are recorded at the level's fps
+for the renderer.
+
+The run ends when the script is done, the level's duration is up, or the physics diverged;
+goals are judged then (end a script with a ``wait`` to give props time to settle).
 """
 
 from __future__ import annotations
@@ -16,10 +20,22 @@ from typing import Literal
 import numpy as np
 
 from ikgame.control.controller import Controller
-from ikgame.level.model import CircleObstacle, Level, SegmentObstacle
-from ikgame.level.script import ScriptRunner, StepOutcome
+from ikgame.level.model import (
+    BallProp,
+    CircleObstacle,
+    FollowCircle,
+    FollowLine,
+    FollowLissajous,
+    FollowPolyline,
+    Level,
+    ReachStep,
+    SegmentObstacle,
+    SetChanges,
+)
+from ikgame.level.scoring import GoalOutcome, GoalTracker, level_score
+from ikgame.level.script import ScriptRunner, StepOutcome, follow_path
 from ikgame.physics.world import World
-from ikgame.snapshot import Scene, Snapshot
+from ikgame.snapshot import PropShape, Scene, Snapshot
 
 __all__ = ["Simulation", "RunResult", "TickInfo", "run_level"]
 
@@ -54,11 +70,15 @@ class RunResult:
     Attributes:
         level: the level's name.
         solver: the solver used at the start.
-        status: ``passed`` (every step passed), ``failed`` or ``diverged`` (the physics blew up).
+        status: ``passed`` (every step and goal passed), ``failed`` or ``diverged`` (the
+            physics blew up).
         steps: per-step outcomes.
         ticks: physics ticks run.
         sim_time: simulated time, s.
         options: the options the run was made with.
+        goals: per-goal outcomes.
+        score: 0..100, see :mod:`ikgame.level.scoring`.
+        expect: the status the level is designed to end with.
     """
 
     level: str
@@ -68,6 +88,9 @@ class RunResult:
     ticks: int
     sim_time: float
     options: dict[str, object] = field(default_factory=dict)
+    goals: tuple[GoalOutcome, ...] = ()
+    score: float = 0.0
+    expect: str = "passed"
 
     def as_dict(self) -> dict[str, object]:
         """Plain data in a fixed key order."""
@@ -75,17 +98,25 @@ class RunResult:
             "level": self.level,
             "solver": self.solver,
             "status": self.status,
+            "expect": self.expect,
+            "score": self.score,
             "steps_passed": sum(s.passed for s in self.steps),
             "steps_total": len(self.steps),
+            "goals_passed": sum(g.passed for g in self.goals),
+            "goals_total": len(self.goals),
             "ticks": self.ticks,
             "sim_time": round(self.sim_time, 6),
             "steps": [s.as_dict() for s in self.steps],
+            "goals": [g.as_dict() for g in self.goals],
             "options": dict(self.options),
         }
 
 
 class Simulation:
     """A level running in a pymunk world under IK control.
+
+    ``solver`` overrides the level's solver for the whole run, so a level's ``set`` steps do
+    not change it (a comparison of solvers stays a comparison).
 
     >>> from ikgame.level.model import Level
     >>> lvl = Level.model_validate({"level": {"name": "x", "duration": 2.0},
@@ -107,7 +138,10 @@ class Simulation:
             iterations=level.chain.iterations,
             arrival=level.chain.arrival,
         )
+        self._solver_pinned = solver is not None
+        self._start_solver = self.controller.solver_name
         self.script = ScriptRunner(level.script)
+        self.goals = GoalTracker(level.goals, [p.name for p in level.props])
         self.dt = 1.0 / level.world.tick_rate
         self.tick = 0
         self.diverged = False
@@ -119,7 +153,9 @@ class Simulation:
         self._tick_rate = level.world.tick_rate
         self._last = TickInfo(0, 0.0, "processing", 0, math.nan, np.zeros(self.world.count, bool))
         self._result: RunResult | None = None
-        self.scene = _scene(level, self.world)
+        self.scene = _scene(level, self.world, self.script)
+        if level.goals:
+            self.goals.observe(0.0, self.world.prop_states())
 
     @property
     def time(self) -> float:
@@ -167,6 +203,8 @@ class Simulation:
         # Frames are taken before the tick, at t = k / fps: a run of T seconds has T x fps frames.
         if self.record and self.tick * self._fps >= len(self.snapshots) * self._tick_rate:
             self.snapshots.append(self.snapshot())
+        if self.script.pending:
+            self._apply(self.script.take_changes())
         target = self.target
         command = self.controller.command(self.world.joint_angles(), target)
         self.world.set_rates(command.rates)
@@ -175,9 +213,14 @@ class Simulation:
         if self.world.diverged():
             self.diverged = True
             return self._last
+        if self.world.skeleton is not self.controller.skeleton:
+            # The base moved: the solver must work from where it is now.
+            self.controller.skeleton = self.world.skeleton
         effector = self.world.end_effector()
         error = math.nan if target is None else float(np.hypot(*(effector - target)))
         self.script.observe(self.time, self.dt, effector)
+        if self.level.goals:
+            self.goals.observe(self.time, self.world.prop_states())
         self._last = TickInfo(
             self.tick,
             self.time,
@@ -199,26 +242,46 @@ class Simulation:
             progress(1.0)
         return self.result
 
+    def _apply(self, changes: list[SetChanges]) -> None:
+        """Apply the changes of ``set`` steps to the world and the controller."""
+        for change in changes:
+            if change.gravity is not None:
+                self.world.set_gravity(change.gravity)
+            if change.solver is not None and not self._solver_pinned:
+                self.controller.set_solver(change.solver)
+            if change.gain is not None:
+                self.controller.gain = change.gain
+            if change.base is not None:
+                self.world.move_base(change.base, change.over)
+
     @property
     def result(self) -> RunResult:
         """The run's result so far (final once :attr:`done`)."""
         if self._result is not None:
             return self._result
-        outcomes = (
-            tuple(self.script.finish(self.time)) if self.done else tuple(self.script.outcomes)
-        )
-        if self.diverged:
-            status: Status = "diverged"
+        if self.done:
+            outcomes = tuple(self.script.finish(self.time))
+            goals = self.goals.finish(self.time, self.world.prop_states())
         else:
-            status = "passed" if outcomes and all(o.passed for o in outcomes) else "failed"
+            outcomes, goals = tuple(self.script.outcomes), ()
+        passed = bool(outcomes) and all(o.passed for o in (*outcomes, *goals))
+        status: Status = "diverged" if self.diverged else "passed" if passed else "failed"
         result = RunResult(
             level=self.level.level.name,
-            solver=self.controller.solver_name,
+            solver=self._start_solver,
             status=status,
             steps=outcomes,
             ticks=self.tick,
             sim_time=self.time,
             options={"tick_rate": self.level.world.tick_rate, "fps": self._fps},
+            goals=goals,
+            score=level_score(
+                [o.score for o in outcomes],
+                [g.score for g in goals],
+                passed=passed,
+                diverged=self.diverged,
+            ),
+            expect=self.level.level.expect,
         )
         if self.done:
             self._result = result
@@ -240,6 +303,7 @@ class Simulation:
             error=self._last.error,
             solver_status=self._last.solver_status,
             torque_limited=self._last.torque_limited.copy(),
+            props=self.world.prop_states(),
         )
 
 
@@ -254,10 +318,21 @@ def run_level(level: Level, *, solver: str | None = None, record: bool = True) -
     return sim
 
 
-def _scene(level: Level, world: World) -> Scene:
+def _scene(level: Level, world: World, script: ScriptRunner) -> Scene:
     segments = [(*o.a, *o.b, o.radius) for o in level.obstacles if isinstance(o, SegmentObstacle)]
     circles = [(*o.center, o.radius) for o in level.obstacles if isinstance(o, CircleObstacle)]
-    targets = [step.reach for step in level.script if hasattr(step, "reach")]
+    targets = []
+    for _, step in script.steps:
+        if isinstance(step, ReachStep):
+            targets.append(step.reach)
+        elif isinstance(step, FollowLine | FollowCircle | FollowLissajous | FollowPolyline):
+            targets.append(follow_path(step)(0.0))
+    props = tuple(
+        PropShape("ball", (p.radius, p.radius))
+        if isinstance(p, BallProp)
+        else PropShape("box", p.size)
+        for p in level.props
+    )
     return Scene(
         level_name=level.level.name,
         segments=np.array(segments, dtype=float).reshape(-1, 5),
@@ -265,7 +340,9 @@ def _scene(level: Level, world: World) -> Scene:
         link_widths=world.link_widths.copy(),
         reach=world.skeleton.reach,
         targets=np.array(targets, dtype=float).reshape(-1, 2),
+        goals=np.array([g.region for g in level.goals], dtype=float).reshape(-1, 4),
+        props=props,
         bounds=level.world.bounds,
-        step_count=len(level.script),
+        step_count=len(script.steps),
         fps=float(level.world.fps),
     )

@@ -5,13 +5,25 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Final
 
-__all__ = ["LEVELS_DIR", "ASSETS_DIR", "DEFAULT_LEVEL", "shipped_levels", "resolve_level"]
+__all__ = [
+    "LEVELS_DIR",
+    "ASSETS_DIR",
+    "THEMES_DIR",
+    "SCHEMA_FILE",
+    "DEFAULT_LEVEL",
+    "shipped_levels",
+    "resolve_level",
+]
 
 _ROOT: Final = Path(__file__).resolve().parents[2]
 LEVELS_DIR: Final = _ROOT / "levels"
 """The shipped levels, numbered in learning order."""
 ASSETS_DIR: Final = _ROOT / "assets"
 """Themes, the level JSON Schema, sprites."""
+THEMES_DIR: Final = ASSETS_DIR / "themes"
+"""Shipped colour themes, one ``<name>.json`` each."""
+SCHEMA_FILE: Final = ASSETS_DIR / "level.schema.json"
+"""The level format's JSON Schema, for editors (kept equal to ``level_schema()`` by a test)."""
 DEFAULT_LEVEL: Final = LEVELS_DIR / "01_first_reach.toml"
 """What ``ikgame run`` plays without a level argument."""
 

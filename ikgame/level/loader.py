@@ -2,6 +2,10 @@
 
 Every problem is reported with the file, the line where it can be found, the field's path and
 what was expected, so a level designer never has to read a traceback.
+
+TOML is data: nothing in a level runs code. The only files a level may name (its ``theme``) must
+resolve, symlinks followed, inside the level's own folder or ``assets/``
+(:func:`resolve_level_file`).
 """
 
 from __future__ import annotations
@@ -14,15 +18,30 @@ from typing import Final
 
 from pydantic import ValidationError
 
-from ikgame.level.model import Level
+from ikgame.level.library import ASSETS_DIR, THEMES_DIR
+from ikgame.level.model import FOLLOW_SHAPES, Level
 
-__all__ = ["LevelError", "Problem", "load_level", "parse_level"]
+__all__ = [
+    "LevelError",
+    "Problem",
+    "load_level",
+    "parse_level",
+    "resolve_level_file",
+    "level_theme",
+    "MAX_FILE_BYTES",
+]
 
 MAX_FILE_BYTES: Final = 1_000_000
 """A level is a few kilobytes; anything this large is a mistake or an attack."""
+MAX_ASSET_BYTES: Final = 1_000_000
+"""Largest file a level may name (a theme is a few hundred bytes)."""
 
-_TAGGED: Final = ("script", "obstacles")
+_TAGGED: Final = ("script", "obstacles", "props")
 """Lists of tagged unions: pydantic names the member's tag after the index."""
+_FOLLOW_KEYS: Final = {
+    shape: frozenset(f.alias or name for name, f in model.model_fields.items())
+    for shape, model in FOLLOW_SHAPES.items()
+}
 _HEADER = re.compile(r"^\s*(\[\[?)\s*([A-Za-z0-9_.\-\" ]+?)\s*\]\]?\s*(#.*)?$")
 
 
@@ -78,7 +97,57 @@ def load_level(path: str | Path) -> Level:
         raise LevelError([Problem(name, None, "", f"not UTF-8 text ({exc.reason})")]) from None
     except OSError as exc:
         raise LevelError([Problem(name, None, "", f"cannot be read ({exc.strerror})")]) from None
-    return parse_level(text, name)
+    level = parse_level(text, name)
+    if level.level.theme is not None:
+        try:
+            level_theme(level, path)
+        except ValueError as exc:
+            line = _locate(text, _tables(text), ("level", "theme"))
+            raise LevelError([Problem(name, line, "level.theme", str(exc))]) from None
+    return level
+
+
+def resolve_level_file(name: str, level_file: str | Path) -> Path:
+    """The real path of a file a level names: looked up in the level's folder, then in
+    ``assets/``; ``ValueError`` when it is missing, too large, or a symlink leads out of both.
+
+    ``name`` has passed :func:`~ikgame.level.model.check_relative_file` (no absolute path, no
+    ``..``); resolving catches the symlinks.
+
+    >>> resolve_level_file("themes/dark.json", "levels/01_first_reach.toml").name
+    'dark.json'
+    """
+    roots = (Path(level_file).resolve().parent, ASSETS_DIR.resolve())
+    for root in roots:
+        candidate = root / name
+        if not (candidate.exists() or candidate.is_symlink()):
+            continue
+        real = candidate.resolve()
+        if not any(real.is_relative_to(r) for r in roots):
+            raise ValueError(
+                f"{name!r} leads outside the level's folder and assets/ (through a symlink)"
+            )
+        if not real.is_file():
+            raise ValueError(f"{name!r} is not a file")
+        if real.stat().st_size > MAX_ASSET_BYTES:
+            raise ValueError(f"{name!r} is larger than {MAX_ASSET_BYTES} bytes")
+        return real
+    raise ValueError(f"no file {name!r} in the level's folder or assets/")
+
+
+def level_theme(level: Level, level_file: str | Path) -> str | Path | None:
+    """The level's theme as the renderer's ``load_theme`` takes it: a shipped theme's name, the
+    real path of a theme file (checked by :func:`resolve_level_file`), or None.
+
+    >>> level_theme(load_level("levels/01_first_reach.toml"), "levels/01_first_reach.toml")
+    """
+    theme = level.level.theme
+    if theme is None or theme.endswith(".json"):
+        return None if theme is None else resolve_level_file(theme, level_file)
+    if not (THEMES_DIR / f"{theme}.json").is_file():
+        shipped = ", ".join(sorted(p.stem for p in THEMES_DIR.glob("*.json")))
+        raise ValueError(f"no shipped theme {theme!r} (shipped: {shipped})")
+    return theme
 
 
 def parse_level(text: str, file: str = "<level>") -> Level:
@@ -98,6 +167,8 @@ def parse_level(text: str, file: str = "<level>") -> Level:
         line = getattr(exc, "lineno", None)
         message = getattr(exc, "msg", str(exc))
         raise LevelError([Problem(file, line, "", f"invalid TOML: {message}")]) from None
+    except RecursionError:
+        raise LevelError([Problem(file, None, "", "invalid TOML: nested too deeply")]) from None
     try:
         return Level.model_validate(data)
     except ValidationError as exc:
@@ -105,16 +176,21 @@ def parse_level(text: str, file: str = "<level>") -> Level:
         problems = []
         for err in exc.errors(include_url=False):
             loc = _without_tags(err["loc"])
-            problems.append(
-                Problem(file, _locate(text, tables, loc), _field_path(loc), _message(err))
-            )
+            message = _message(err)
+            if err["type"] in ("union_tag_invalid", "union_tag_not_found"):
+                loc = (*loc, err["ctx"]["discriminator"].strip("'"))
+            problems.append(Problem(file, _locate(text, tables, loc), _field_path(loc), message))
         raise LevelError(problems) from None
 
 
 def _without_tags(loc: tuple[object, ...]) -> tuple[object, ...]:
-    """Drop the union tags pydantic puts in a path: ``script[0].reach.hold`` is ``script[0].hold``."""
-    if len(loc) > 3 and loc[0] in _TAGGED and isinstance(loc[1], int):
-        return loc[:2] + loc[3:]
+    """Drop the union tags pydantic puts in a path: ``script[0].reach.hold`` is
+    ``script[0].hold``, and ``script[0].follow.circle.radius`` is ``script[0].radius``."""
+    if len(loc) > 2 and loc[0] in _TAGGED and isinstance(loc[1], int):
+        rest = loc[3:]
+        if loc[2] == "follow" and rest and rest[0] in FOLLOW_SHAPES:
+            rest = rest[1:]
+        return loc[:2] + rest
     return loc
 
 
@@ -131,14 +207,35 @@ def _field_path(loc: tuple[object, ...]) -> str:
 
 def _message(err: dict) -> str:
     message = err["msg"].removeprefix("Value error, ")
-    if err["type"] == "extra_forbidden":
+    kind = err["type"]
+    if kind == "extra_forbidden":
+        loc = err["loc"]
+        if len(loc) == 5 and loc[2] == "follow" and loc[3] in FOLLOW_SHAPES:
+            return _follow_key_message(loc[3], str(loc[4]))
         return "unknown key (check the spelling; see docs/levels.md)"
-    if err["type"] == "missing":
+    if kind in ("missing", "union_tag_not_found"):
+        return "Field required"
+    if kind == "union_tag_invalid":
+        return f"must be one of {err['ctx']['expected_tags']} (got {err['ctx']['tag']!r})"
+    if kind in ("level_rule", "step_kind"):
         return message
     value = err.get("input")
     if isinstance(value, dict | list) or value is None:
         return message
     return f"{message} (got {value!r})"
+
+
+def _follow_key_message(shape: str, key: str) -> str:
+    """Name the shapes a misplaced follow key belongs to, and the keys this shape takes."""
+    common = frozenset.intersection(*_FOLLOW_KEYS.values())
+    own = ", ".join(sorted(_FOLLOW_KEYS[shape] - common))
+    owners = [s for s, keys in _FOLLOW_KEYS.items() if key in keys]
+    if not owners:
+        return f"unknown key (follow = {shape!r} takes {own}; see docs/levels.md)"
+    return (
+        f"belongs to follow = {' or '.join(repr(o) for o in owners)}, "
+        f"not {shape!r} (which takes {own})"
+    )
 
 
 def _tables(text: str) -> dict[tuple[object, ...], int]:
@@ -174,7 +271,8 @@ def _locate(
         start = tables[prefix]
         if cut == len(loc) or not isinstance(loc[cut], str):
             return start if prefix else None
-        key = re.compile(rf"^\s*\"?{re.escape(str(loc[cut]))}\"?\s*=")
+        # ``key =``, or a dotted key such as ``set.base =``.
+        key = re.compile(rf"^\s*\"?{re.escape(str(loc[cut]))}\"?\s*[=.]")
         lines = text.splitlines()
         for number in range(start if prefix else 1, len(lines) + 1):
             line = lines[number - 1]

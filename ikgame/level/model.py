@@ -2,20 +2,43 @@
 
 Level files use degrees and seconds; :class:`Level` keeps the file's values as written (so the
 JSON Schema and error messages speak the file's units) and offers radian views where the
-simulation needs them. Every range here is a guard against typos and hostile files alike.
+simulation needs them. Every range here is a guard against typos and hostile files alike: a level
+is data, and the limits below bound the memory, time and disk a level can ask for.
+
+Checks that span several fields raise a ``ValidationError`` located at the field to blame (see
+:func:`_invalid`), so the loader can point at the right line of the file.
 """
 
 from __future__ import annotations
 
 import math
+import re
 from typing import Annotated, Final, Literal
 
-from pydantic import BaseModel, ConfigDict, Discriminator, Field, Tag, model_validator
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    Discriminator,
+    Field,
+    Tag,
+    ValidationError,
+    field_validator,
+    model_validator,
+)
+from pydantic_core import InitErrorDetails, PydanticCustomError
 
 __all__ = [
     "MAX_LINKS",
     "MAX_DURATION",
     "MAX_STEPS",
+    "MAX_POINTS",
+    "MAX_OBSTACLES",
+    "MAX_PROPS",
+    "MAX_GOALS",
+    "MAX_FRAMES",
+    "MAX_TICKS",
+    "SOLVER_NAMES",
+    "FOLLOW_SHAPES",
     "Level",
     "LevelInfo",
     "WorldConfig",
@@ -23,10 +46,22 @@ __all__ = [
     "LinkConfig",
     "SegmentObstacle",
     "CircleObstacle",
+    "BallProp",
+    "BoxProp",
+    "Goal",
     "ReachStep",
+    "FollowLine",
+    "FollowCircle",
+    "FollowLissajous",
+    "FollowPolyline",
     "WaitStep",
+    "SetChanges",
+    "SetStep",
+    "SequenceStep",
     "Step",
-    "SOLVER_NAMES",
+    "step_count",
+    "follow_duration",
+    "check_relative_file",
 ]
 
 MAX_LINKS: Final = 200
@@ -34,17 +69,59 @@ MAX_LINKS: Final = 200
 MAX_DURATION: Final = 600.0
 """Simulated seconds in one level."""
 MAX_STEPS: Final = 500
-"""Script steps in one level."""
+"""Script steps in one level, after each ``sequence`` is expanded into its reach steps."""
+MAX_POINTS: Final = 1000
+"""Points in one ``polyline`` path or one ``sequence``."""
+MAX_OBSTACLES: Final = 500
+"""Static obstacles in one level."""
+MAX_PROPS: Final = 100
+"""Dynamic props in one level."""
+MAX_GOALS: Final = 100
+"""Goals in one level."""
+MAX_FRAMES: Final = 18_000
+"""Recorded frames (``duration`` x ``fps``): 10 minutes at 30 fps; bounds memory and disk."""
+MAX_TICKS: Final = 300_000
+"""Physics ticks (``duration`` x ``tick_rate``): bounds the time a run can take."""
 MAX_COORD: Final = 1.0e5
 """Largest coordinate or length, px: beyond it the camera and physics lose all meaning."""
 
 SOLVER_NAMES: Final = ("ccd", "jacobian_transpose", "dls", "fabrik")
 
+# Printable text only: a level's names end up in terminals and pictures.
+_NAME_PATTERN: Final = r"^[^\x00-\x1f\x7f]*$"
+_TEXT_PATTERN: Final = r"^[^\x00-\x09\x0b-\x1f\x7f]*$"
+_THEME_NAME: Final = re.compile(r"^[A-Za-z0-9_-]+$")
+
 Coord = Annotated[float, Field(ge=-MAX_COORD, le=MAX_COORD, allow_inf_nan=False)]
 Vec2 = tuple[Coord, Coord]
+Region = tuple[Coord, Coord, Coord, Coord]
 Length = Annotated[float, Field(gt=0, le=MAX_COORD, allow_inf_nan=False)]
 Seconds = Annotated[float, Field(gt=0, le=MAX_DURATION, allow_inf_nan=False)]
 Degrees = Annotated[float, Field(ge=-180.0, le=180.0, allow_inf_nan=False)]
+Mass = Annotated[float, Field(gt=0, le=1e6, allow_inf_nan=False)]
+Friction = Annotated[float, Field(ge=0, le=10, allow_inf_nan=False)]
+Tolerance = Annotated[float, Field(gt=0, le=1000, allow_inf_nan=False)]
+Gain = Annotated[float, Field(gt=0, le=1000, allow_inf_nan=False)]
+Name = Annotated[str, Field(min_length=1, max_length=40, pattern=_NAME_PATTERN)]
+SolverName = Literal["ccd", "jacobian_transpose", "dls", "fabrik"]
+
+
+def _invalid(loc: tuple[str | int, ...], message: str, value: object) -> ValidationError:
+    """A validation error located at ``loc`` (relative to the model being validated).
+
+    Raised from a model validator, pydantic prefixes the model's own location, so a check that
+    spans fields can still blame the one field a designer has to change.
+    """
+    return ValidationError.from_exception_data(
+        "Level",
+        [
+            InitErrorDetails(
+                type=PydanticCustomError("level_rule", "{message}", {"message": message}),
+                loc=loc,
+                input=value,
+            )
+        ],
+    )
 
 
 class _Model(BaseModel):
@@ -52,20 +129,61 @@ class _Model(BaseModel):
 
 
 class LevelInfo(_Model):
-    """``[level]``: name, description and how long the level may run."""
+    """[level]: name, description, how long the level may run and how it should end."""
 
-    name: str = Field(min_length=1, max_length=80, description="Display name.")
-    description: str = Field("", max_length=2000, description="What the level teaches.")
+    name: str = Field(
+        min_length=1, max_length=80, pattern=_NAME_PATTERN, description="Display name."
+    )
+    description: str = Field(
+        "", max_length=2000, pattern=_TEXT_PATTERN, description="What the level teaches."
+    )
     duration: Seconds = Field(description="Simulated time at most, s.")
     expect: Literal["passed", "failed"] = Field(
         "passed",
         description="The status the level is designed to end with ('failed' for a level that "
         "shows the failure state on purpose).",
     )
+    theme: str | None = Field(
+        None,
+        min_length=1,
+        max_length=200,
+        description="Colour theme: a shipped theme's name ('dark', 'light') or a .json file "
+        "inside the level's folder or assets/.",
+    )
+
+    @field_validator("theme")
+    @classmethod
+    def _theme_inside(cls, value: str | None) -> str | None:
+        if value is not None and not _THEME_NAME.match(value):
+            check_relative_file(value, ".json")
+        return value
+
+
+def check_relative_file(name: str, suffix: str) -> None:
+    """Raise ``ValueError`` unless ``name`` is a relative path that cannot leave its folder.
+
+    Whether the file exists, and where its symlinks lead, is checked when the level is loaded
+    from a file (:func:`ikgame.level.loader.resolve_level_file`).
+
+    >>> check_relative_file("../secret.json", ".json")
+    Traceback (most recent call last):
+    ...
+    ValueError: must stay inside the level's folder or assets/: '..' is not allowed
+    """
+    if "\\" in name or "\x00" in name:
+        raise ValueError("must be a relative path with '/' separators")
+    if name.startswith("/") or re.match(r"^[A-Za-z]:", name):
+        raise ValueError(
+            "must be a path relative to the level's folder or assets/, not an absolute path"
+        )
+    if ".." in name.split("/"):
+        raise ValueError("must stay inside the level's folder or assets/: '..' is not allowed")
+    if not name.endswith(suffix):
+        raise ValueError(f"must be a shipped theme's name or a {suffix} file")
 
 
 class WorldConfig(_Model):
-    """``[world]``: gravity, damping and the fixed clocks of the run."""
+    """[world]: gravity, damping and the fixed clocks of the run."""
 
     gravity: Vec2 = Field((0.0, -900.0), description="Gravity, px/s^2 (y up).")
     damping: float = Field(
@@ -77,26 +195,33 @@ class WorldConfig(_Model):
     )
     tick_rate: int = Field(240, ge=30, le=2000, description="Physics ticks per second.")
     fps: int = Field(30, ge=1, le=120, description="Recorded frames per second.")
-    bounds: tuple[Coord, Coord, Coord, Coord] | None = Field(
+    bounds: Region | None = Field(
         None, description="Camera bounds (xmin, ymin, xmax, ymax), px; fitted when absent."
     )
 
     @model_validator(mode="after")
     def _bounds_ordered(self) -> WorldConfig:
         if self.bounds is not None:
-            xmin, ymin, xmax, ymax = self.bounds
-            if xmin >= xmax or ymin >= ymax:
-                raise ValueError(
-                    "bounds must be (xmin, ymin, xmax, ymax) with xmin < xmax, ymin < ymax"
-                )
+            _check_region(self.bounds, "bounds")
         return self
 
 
+def _check_region(region: tuple[float, float, float, float], field: str) -> None:
+    xmin, ymin, xmax, ymax = region
+    if xmin >= xmax or ymin >= ymax:
+        raise _invalid(
+            (field,),
+            f"must be (xmin, ymin, xmax, ymax) with xmin < xmax and ymin < ymax, "
+            f"got {list(region)}",
+            list(region),
+        )
+
+
 class LinkConfig(_Model):
-    """``[[chain.links]]``: one link (or ``repeat`` identical links) and its joint."""
+    """[[chain.links]]: one link (or `repeat` identical links) and its joint."""
 
     length: Length = Field(description="Link length, px.")
-    mass: float = Field(1.0, gt=0, le=1e6, allow_inf_nan=False, description="Link mass.")
+    mass: Mass = Field(1.0, description="Link mass.")
     width: float = Field(
         12.0, gt=0, le=1000, allow_inf_nan=False, description="Link thickness, px."
     )
@@ -114,7 +239,11 @@ class LinkConfig(_Model):
     @model_validator(mode="after")
     def _limits_ordered(self) -> LinkConfig:
         if self.limits is not None and self.limits[0] >= self.limits[1]:
-            raise ValueError(f"limits must be [min, max] with min < max, got {list(self.limits)}")
+            raise _invalid(
+                ("limits",),
+                f"must be [min, max] with min < max, got {list(self.limits)}",
+                list(self.limits),
+            )
         return self
 
     @property
@@ -126,31 +255,27 @@ class LinkConfig(_Model):
 
 
 class ChainConfig(_Model):
-    """``[chain]``: where the chain is mounted, how it is controlled, and its links."""
+    """[chain]: where the chain is mounted, how it is controlled, and its links."""
 
     base: Vec2 = Field((0.0, 0.0), description="Base position, px.")
     angle: Degrees = Field(90.0, description="Direction of the base mount, degrees (90 = up).")
-    solver: Literal["ccd", "jacobian_transpose", "dls", "fabrik"] = Field(
-        "ccd", description="IK solver."
-    )
+    solver: SolverName = Field("ccd", description="IK solver.")
     iterations: int = Field(10, ge=1, le=1000, description="Solver iterations per tick.")
     arrival: float = Field(
         0.5, ge=0, le=1000, allow_inf_nan=False, description="Solver arrival distance, px."
     )
-    gain: float = Field(
-        12.0,
-        gt=0,
-        le=1000,
-        allow_inf_nan=False,
-        description="Joint servo gain, 1/s: motor rate = gain x angle error.",
+    gain: Gain = Field(12.0, description="Joint servo gain, 1/s: motor rate = gain x angle error.")
+    links: list[LinkConfig] = Field(
+        min_length=1, max_length=MAX_LINKS, description="The links, base first."
     )
-    links: list[LinkConfig] = Field(min_length=1, description="The links, base first.")
 
     @model_validator(mode="after")
     def _link_count(self) -> ChainConfig:
         total = sum(link.repeat for link in self.links)
         if total > MAX_LINKS:
-            raise ValueError(f"a chain has at most {MAX_LINKS} links, this one has {total}")
+            raise _invalid(
+                ("links",), f"a chain has at most {MAX_LINKS} links, this one has {total}", total
+            )
         return self
 
     @property
@@ -160,7 +285,7 @@ class ChainConfig(_Model):
 
 
 class SegmentObstacle(_Model):
-    """``[[obstacles]]`` with ``kind = "segment"``: a static thick line."""
+    """[[obstacles]] with kind = "segment": a static thick line."""
 
     kind: Literal["segment"]
     a: Vec2 = Field(description="One end, px.")
@@ -168,39 +293,267 @@ class SegmentObstacle(_Model):
     radius: float = Field(
         4.0, ge=0, le=1000, allow_inf_nan=False, description="Half thickness, px."
     )
-    friction: float = Field(0.8, ge=0, le=10, allow_inf_nan=False, description="Friction.")
+    friction: Friction = Field(0.8, description="Friction.")
 
 
 class CircleObstacle(_Model):
-    """``[[obstacles]]`` with ``kind = "circle"``: a static disc."""
+    """[[obstacles]] with kind = "circle": a static disc."""
 
     kind: Literal["circle"]
     center: Vec2 = Field(description="Centre, px.")
     radius: Length = Field(description="Radius, px.")
-    friction: float = Field(0.8, ge=0, le=10, allow_inf_nan=False, description="Friction.")
+    friction: Friction = Field(0.8, description="Friction.")
 
 
 Obstacle = Annotated[SegmentObstacle | CircleObstacle, Field(discriminator="kind")]
 
 
+class _Prop(_Model):
+    kind: str
+    name: Name = Field(description="Unique name; goals refer to the prop by it.")
+    position: Vec2 = Field(description="Starting position of the centre, px.")
+    angle: Degrees = Field(0.0, description="Starting angle, degrees.")
+    mass: Mass = Field(1.0, description="Mass (a link of the same mass weighs the same).")
+    friction: Friction = Field(0.7, description="Friction.")
+    elasticity: float = Field(
+        0.2,
+        ge=0,
+        le=1,
+        allow_inf_nan=False,
+        description="Bounce off obstacles, 0 (none) to 1 (full); two props bounce with the "
+        "product of theirs; links never bounce.",
+    )
+
+
+class BallProp(_Prop):
+    """[[props]] with kind = "ball": a dynamic disc the chain can push."""
+
+    kind: Literal["ball"]
+    radius: Annotated[float, Field(gt=0, le=1000, allow_inf_nan=False)] = Field(
+        description="Radius, px."
+    )
+
+
+class BoxProp(_Prop):
+    """[[props]] with kind = "box": a dynamic rectangle the chain can push."""
+
+    kind: Literal["box"]
+    size: tuple[
+        Annotated[float, Field(gt=0, le=2000, allow_inf_nan=False)],
+        Annotated[float, Field(gt=0, le=2000, allow_inf_nan=False)],
+    ] = Field(description="Width and height, px.")
+
+
+Prop = Annotated[BallProp | BoxProp, Field(discriminator="kind")]
+
+
+class Goal(_Model):
+    """[[goals]]: a region a prop must end inside; scored at the end of the run."""
+
+    prop: Name = Field(description="The name of the prop that must end inside the region.")
+    region: Region = Field(description="The region (xmin, ymin, xmax, ymax), px.")
+    hold: float = Field(
+        0.0,
+        ge=0,
+        le=MAX_DURATION,
+        allow_inf_nan=False,
+        description="Time the prop's centre must have stayed inside when the run ends, s.",
+    )
+    name: str = Field(
+        "",
+        max_length=40,
+        pattern=_NAME_PATTERN,
+        description="Display name; 'goal N' (N counting from 1) when empty.",
+    )
+
+    @model_validator(mode="after")
+    def _region_ordered(self) -> Goal:
+        _check_region(self.region, "region")
+        return self
+
+
 class ReachStep(_Model):
-    """``[[script]]`` with ``reach``: move the end effector to a point and hold it there."""
+    """[[script]] with reach: move the end effector to a point and hold it there."""
 
     reach: Vec2 = Field(description="Target point, px.")
-    tolerance: float = Field(6.0, gt=0, le=1000, allow_inf_nan=False, description="px.")
+    tolerance: Tolerance = Field(6.0, description="Distance that counts as reached, px.")
     hold: float = Field(
         0.5, ge=0, le=MAX_DURATION, allow_inf_nan=False, description="Time within tolerance, s."
     )
     timeout: Seconds = Field(4.0, description="Time before the step fails, s.")
 
 
+class _Follow(_Model):
+    follow: str
+    duration: Seconds = Field(description="Time the target takes along the path, s.")
+    easing: Literal["linear", "in", "out", "in-out"] = Field(
+        "linear",
+        description="How the path parameter runs: steadily, speeding up, slowing down, or both.",
+    )
+    tolerance: Tolerance = Field(15.0, description="Largest mean tracking error that passes, px.")
+    lead_in: float = Field(
+        1.0,
+        ge=0,
+        le=60,
+        allow_inf_nan=False,
+        description="Time aiming at the path's start before the target moves and scoring "
+        "begins, s.",
+    )
+
+
+class FollowLine(_Follow):
+    """[[script]] with follow = "line": the target runs from one point to another."""
+
+    follow: Literal["line"]
+    from_: Vec2 = Field(alias="from", description="Start point, px.")
+    to: Vec2 = Field(description="End point, px.")
+
+
+class FollowCircle(_Follow):
+    """[[script]] with follow = "circle": the target goes round a circle."""
+
+    follow: Literal["circle"]
+    center: Vec2 = Field(description="Centre, px.")
+    radius: Length = Field(description="Radius, px.")
+    period: Seconds = Field(description="Time for one turn, s.")
+    direction: Literal["ccw", "cw"] = Field("ccw", description="Counter-clockwise or clockwise.")
+    start: Degrees = Field(0.0, description="Angle of the start point, degrees (0 = +x).")
+
+
+class FollowLissajous(_Follow):
+    """[[script]] with follow = "lissajous": x = ax sin(2 pi fx s + phase), y = ay sin(2 pi fy s)
+    about the centre (fx = 1, fy = 2 traces a figure-eight)."""
+
+    follow: Literal["lissajous"]
+    center: Vec2 = Field(description="Centre, px.")
+    amplitude: tuple[
+        Annotated[float, Field(ge=0, le=MAX_COORD, allow_inf_nan=False)],
+        Annotated[float, Field(ge=0, le=MAX_COORD, allow_inf_nan=False)],
+    ] = Field(description="Half width and half height [ax, ay], px.")
+    frequency: tuple[
+        Annotated[float, Field(ge=0, le=20, allow_inf_nan=False)],
+        Annotated[float, Field(ge=0, le=20, allow_inf_nan=False)],
+    ] = Field(description="Turns per second along x and y [fx, fy], Hz.")
+    phase: float = Field(
+        0.0, ge=-360, le=360, allow_inf_nan=False, description="Phase of x ahead of y, degrees."
+    )
+
+
+class FollowPolyline(_Follow):
+    """[[script]] with follow = "polyline": the target runs along straight pieces at a speed."""
+
+    follow: Literal["polyline"]
+    points: list[Vec2] = Field(
+        min_length=2, max_length=MAX_POINTS, description="Corner points, in order, px."
+    )
+    speed: float = Field(gt=0, le=1.0e4, allow_inf_nan=False, description="Target speed, px/s.")
+    duration: Seconds | None = Field(
+        None,
+        description="Time along the path, s (the target waits at the last point once there); "
+        "default: path length / speed.",
+    )
+
+    @model_validator(mode="after")
+    def _has_length(self) -> FollowPolyline:
+        length = self.length
+        if length <= 0:
+            raise _invalid(("points",), "the points must not all be the same", None)
+        if self.duration is None and length / self.speed > MAX_DURATION:
+            raise _invalid(
+                ("speed",),
+                f"the path takes {length / self.speed:g} s at this speed; at most {MAX_DURATION:g}",
+                self.speed,
+            )
+        return self
+
+    @property
+    def length(self) -> float:
+        """Length of the path, px."""
+        return sum(math.dist(a, b) for a, b in zip(self.points, self.points[1:], strict=False))
+
+
+FollowStep = Annotated[
+    FollowLine | FollowCircle | FollowLissajous | FollowPolyline, Field(discriminator="follow")
+]
+FOLLOW_SHAPES: Final = {
+    "line": FollowLine,
+    "circle": FollowCircle,
+    "lissajous": FollowLissajous,
+    "polyline": FollowPolyline,
+}
+"""The model of each ``follow`` shape, by name."""
+
+
+def follow_duration(step: FollowLine | FollowCircle | FollowLissajous | FollowPolyline) -> float:
+    """Time the target moves along a follow step's path, s.
+
+    >>> follow_duration(FollowPolyline(follow="polyline", points=[(0, 0), (30, 40)], speed=10))
+    5.0
+    """
+    if step.duration is not None:
+        return step.duration
+    return step.length / step.speed
+
+
 class WaitStep(_Model):
-    """``[[script]]`` with ``wait``: keep the current target for a while."""
+    """[[script]] with wait: keep the current target for a while."""
 
     wait: Seconds = Field(description="How long, s.")
 
 
-_STEP_KINDS: Final = ("reach", "wait")
+class SetChanges(_Model):
+    """The changes of a set step; give at least one of gravity, solver, gain, base."""
+
+    gravity: Vec2 | None = Field(None, description="New gravity, px/s^2.")
+    solver: SolverName | None = Field(None, description="New IK solver.")
+    gain: Gain | None = Field(None, description="New joint servo gain, 1/s.")
+    base: Vec2 | None = Field(
+        None, description="Where the chain's base moves to (smoothly, over `over` s), px."
+    )
+    over: Seconds = Field(1.0, description="Time the base takes to move, s (with base only).")
+
+    @model_validator(mode="after")
+    def _something_changes(self) -> SetChanges:
+        given = self.model_fields_set
+        if not given & {"gravity", "solver", "gain", "base"}:
+            raise ValueError("give at least one of gravity, solver, gain, base")
+        if "over" in given and self.base is None:
+            raise _invalid(("over",), "only applies with base", self.over)
+        return self
+
+
+class SetStep(_Model):
+    """[[script]] with set: change the world or the controller from this moment on; takes no
+    time (the base then moves while the next steps run)."""
+
+    set: SetChanges = Field(description="What changes.")
+
+
+class SequenceStep(_Model):
+    """[[script]] with sequence: reach several points in turn, each scored as a reach step."""
+
+    sequence: list[Vec2] = Field(
+        min_length=1, max_length=MAX_POINTS, description="Target points, in order, px."
+    )
+    tolerance: Tolerance = Field(6.0, description="Distance that counts as reached, px.")
+    hold: float = Field(
+        0.5, ge=0, le=MAX_DURATION, allow_inf_nan=False, description="Time within tolerance, s."
+    )
+    timeout: Seconds = Field(4.0, description="Time each point may take before it fails, s.")
+
+    def reach_steps(self) -> tuple[ReachStep, ...]:
+        """One reach step per point.
+
+        >>> SequenceStep(sequence=[(1, 2), (3, 4)]).reach_steps()[1].reach
+        (3.0, 4.0)
+        """
+        return tuple(
+            ReachStep(reach=p, tolerance=self.tolerance, hold=self.hold, timeout=self.timeout)
+            for p in self.sequence
+        )
+
+
+_STEP_KINDS: Final = ("reach", "follow", "wait", "set", "sequence")
 
 
 def _step_kind(value: object) -> str | None:
@@ -210,7 +563,11 @@ def _step_kind(value: object) -> str | None:
 
 
 Step = Annotated[
-    Annotated[ReachStep, Tag("reach")] | Annotated[WaitStep, Tag("wait")],
+    Annotated[ReachStep, Tag("reach")]
+    | Annotated[FollowStep, Tag("follow")]
+    | Annotated[WaitStep, Tag("wait")]
+    | Annotated[SetStep, Tag("set")]
+    | Annotated[SequenceStep, Tag("sequence")],
     Discriminator(
         _step_kind,
         custom_error_type="step_kind",
@@ -220,8 +577,17 @@ Step = Annotated[
 ]
 
 
+def step_count(script: list[Step] | tuple[Step, ...]) -> int:
+    """Steps the script runs, each point of a ``sequence`` counted as a step.
+
+    >>> step_count([WaitStep(wait=1.0), SequenceStep(sequence=[(0, 1), (1, 0)])])
+    3
+    """
+    return sum(len(s.sequence) if isinstance(s, SequenceStep) else 1 for s in script)
+
+
 class Level(_Model):
-    """A whole level file. Load one with :func:`ikgame.load_level`.
+    """A whole level file. Load one with :func:`ikgame.level.loader.load_level`.
 
     >>> Level.model_validate({"level": {"name": "x", "duration": 1.0},
     ...     "chain": {"links": [{"length": 50.0, "repeat": 2}]},
@@ -232,5 +598,50 @@ class Level(_Model):
     level: LevelInfo
     world: WorldConfig = WorldConfig()
     chain: ChainConfig
-    obstacles: list[Obstacle] = Field(default_factory=list, max_length=500)
+    obstacles: list[Obstacle] = Field(default_factory=list, max_length=MAX_OBSTACLES)
+    props: list[Prop] = Field(default_factory=list, max_length=MAX_PROPS)
+    goals: list[Goal] = Field(default_factory=list, max_length=MAX_GOALS)
     script: list[Step] = Field(min_length=1, max_length=MAX_STEPS)
+
+    @model_validator(mode="after")
+    def _consistent(self) -> Level:
+        duration = self.level.duration
+        frames = duration * self.world.fps
+        if frames > MAX_FRAMES:
+            raise _invalid(
+                ("level", "duration"),
+                f"{duration:g} s at {self.world.fps} fps records {frames:g} frames; at most "
+                f"{MAX_FRAMES} (shorten the level or lower world.fps)",
+                duration,
+            )
+        ticks = duration * self.world.tick_rate
+        if ticks > MAX_TICKS:
+            raise _invalid(
+                ("level", "duration"),
+                f"{duration:g} s at {self.world.tick_rate} ticks/s runs {ticks:g} ticks; at most "
+                f"{MAX_TICKS} (shorten the level or lower world.tick_rate)",
+                duration,
+            )
+        steps = step_count(self.script)
+        if steps > MAX_STEPS:
+            raise _invalid(
+                ("script",),
+                f"the script runs {steps} steps (each sequence point counts); at most {MAX_STEPS}",
+                None,
+            )
+        names: set[str] = set()
+        for i, prop in enumerate(self.props):
+            if prop.name in names:
+                raise _invalid(
+                    ("props", i, "name"), f"another prop is already named {prop.name!r}", prop.name
+                )
+            names.add(prop.name)
+        for i, goal in enumerate(self.goals):
+            if goal.prop not in names:
+                known = ", ".join(repr(n) for n in sorted(names)) or "none"
+                raise _invalid(
+                    ("goals", i, "prop"),
+                    f"no prop is named {goal.prop!r} (props: {known})",
+                    goal.prop,
+                )
+        return self

@@ -1,27 +1,78 @@
 """The level script at run time: which target the chain aims at, and how each step scored.
 
 A :class:`ScriptRunner` plays the level's steps in order. Each tick the simulation reads
-``runner.target`` before stepping the world, then calls ``runner.observe(time, effector)``
+``runner.target`` before stepping the world, then calls ``runner.observe(time, dt, effector)``
 with the new end-effector position; a step that finishes hands over to the next one at once.
 Each step kind is a small class with ``target(time)``, ``observe(time, dt, effector)`` (True
-when finished) and ``outcome()``; add a kind by adding a class and a line to ``_RUNS``.
+when finished) and ``outcome(time)``; add a kind by adding a class and a line to ``_RUNS``.
+
+Two kinds never reach a run class: a ``sequence`` is expanded into reach steps when the runner
+is built (:func:`expand_script`), and a ``set`` step finishes the moment it begins, leaving its
+changes in :attr:`ScriptRunner.pending` for the simulation to apply to the world and controller.
 """
 
 from __future__ import annotations
 
+import bisect
 import math
-from dataclasses import asdict, dataclass
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Final
 
 import numpy as np
 
-from ikgame.level.model import ReachStep, Step, WaitStep
+from ikgame.level.model import (
+    FollowCircle,
+    FollowLine,
+    FollowLissajous,
+    FollowPolyline,
+    ReachStep,
+    SequenceStep,
+    SetChanges,
+    SetStep,
+    Step,
+    WaitStep,
+    follow_duration,
+)
+from ikgame.level.scoring import follow_score, reach_score
 
-__all__ = ["StepOutcome", "ScriptRunner"]
+__all__ = ["StepOutcome", "ScriptRunner", "expand_script", "follow_path", "EASINGS"]
+
+_EPS: Final = 1e-9
+"""Slack on time comparisons (s): tick times are sums of floats."""
+
+EASINGS: Final[dict[str, Callable[[float], float]]] = {
+    "linear": lambda u: u,
+    "in": lambda u: u * u,
+    "out": lambda u: 1.0 - (1.0 - u) * (1.0 - u),
+    "in-out": lambda u: u * u * (3.0 - 2.0 * u),
+}
+"""How a follow step's path parameter runs, as a map of [0, 1] onto itself."""
+
+_OUTCOME_KEYS: Final = (
+    "index",
+    "source",
+    "kind",
+    "passed",
+    "score",
+    "reached",
+    "time_to_reach",
+    "final_error",
+    "mean_error",
+    "max_error",
+    "started",
+    "ended",
+    "note",
+)
 
 
 @dataclass(frozen=True)
 class StepOutcome:
     """How one script step went; times in s, errors in px (None where not measured).
+
+    ``index`` counts the steps as they run (each point of a ``sequence`` is a step of its own);
+    ``source`` is the step's index in the file's ``script`` list. ``score`` is 0..100 for the
+    steps that are scored (reach, follow) and None for wait and set.
 
     >>> StepOutcome(0, "reach", True, True, 1.25, 2.0).as_dict()["time_to_reach"]
     1.25
@@ -38,10 +89,13 @@ class StepOutcome:
     started: float = 0.0
     ended: float | None = None
     note: str = ""
+    score: float | None = None
+    source: int | None = None
 
     def as_dict(self) -> dict[str, object]:
-        """Plain data for ``results.json``: floats rounded to 1e-4, unmeasured values None."""
-        return {k: _plain(v) for k, v in asdict(self).items()}
+        """Plain data for ``results.json``, in a fixed key order: floats rounded to 1e-4,
+        unmeasured values None."""
+        return {key: _plain(getattr(self, key)) for key in _OUTCOME_KEYS}
 
 
 def _plain(value: object) -> object:
@@ -50,13 +104,106 @@ def _plain(value: object) -> object:
     return value
 
 
-class _ReachRun:
+def expand_script(steps: list[Step] | tuple[Step, ...]) -> tuple[tuple[int, Step], ...]:
+    """The steps as they run, each with its index in the file: sequences become reach steps.
+
+    >>> [(i, type(s).__name__) for i, s in expand_script(
+    ...     [WaitStep(wait=1.0), SequenceStep(sequence=[(0, 1), (1, 0)])])]
+    [(0, 'WaitStep'), (1, 'ReachStep'), (1, 'ReachStep')]
+    """
+    out: list[tuple[int, Step]] = []
+    for source, step in enumerate(steps):
+        if isinstance(step, SequenceStep):
+            out.extend((source, reach) for reach in step.reach_steps())
+        else:
+            out.append((source, step))
+    return tuple(out)
+
+
+PathFn = Callable[[float], tuple[float, float]]
+
+
+def follow_path(step: FollowLine | FollowCircle | FollowLissajous | FollowPolyline) -> PathFn:
+    """The target's position (px) ``s`` seconds along a follow step's path, before easing.
+
+    >>> from ikgame.level.model import FollowCircle
+    >>> path = follow_path(FollowCircle(follow="circle", center=(0, 0), radius=10, period=4,
+    ...     duration=4))
+    >>> [round(v, 6) for v in path(1.0)]
+    [0.0, 10.0]
+    """
+    if isinstance(step, FollowLine):
+        (x0, y0), (x1, y1), duration = step.from_, step.to, step.duration
+
+        def line(s: float) -> tuple[float, float]:
+            u = s / duration
+            return (x0 + (x1 - x0) * u, y0 + (y1 - y0) * u)
+
+        return line
+    if isinstance(step, FollowCircle):
+        (cx, cy), radius = step.center, step.radius
+        start = math.radians(step.start)
+        turn = (1.0 if step.direction == "ccw" else -1.0) * 2.0 * math.pi / step.period
+
+        def circle(s: float) -> tuple[float, float]:
+            angle = start + turn * s
+            return (cx + radius * math.cos(angle), cy + radius * math.sin(angle))
+
+        return circle
+    if isinstance(step, FollowLissajous):
+        (cx, cy), (ax, ay) = step.center, step.amplitude
+        wx, wy = (2.0 * math.pi * f for f in step.frequency)
+        phase = math.radians(step.phase)
+
+        def lissajous(s: float) -> tuple[float, float]:
+            return (cx + ax * math.sin(wx * s + phase), cy + ay * math.sin(wy * s))
+
+        return lissajous
+    points = [(float(x), float(y)) for x, y in step.points]
+    along = [0.0]
+    for a, b in zip(points, points[1:], strict=False):
+        along.append(along[-1] + math.dist(a, b))
+    speed = step.speed
+
+    def polyline(s: float) -> tuple[float, float]:
+        distance = min(max(speed * s, 0.0), along[-1])
+        i = min(bisect.bisect_right(along, distance), len(points) - 1)
+        piece = along[i] - along[i - 1]
+        u = (distance - along[i - 1]) / piece if piece > 0 else 1.0
+        (x0, y0), (x1, y1) = points[i - 1], points[i]
+        return (x0 + (x1 - x0) * u, y0 + (y1 - y0) * u)
+
+    return polyline
+
+
+class _Run:
+    """What every step kind shares: where it sits in the script and when it began."""
+
+    kind = ""
+
+    def __init__(self, index: int, source: int, start: float) -> None:
+        self.index, self.source, self.start = index, source, start
+
+    def _outcome(self, passed: bool, ended: float, **measures: object) -> StepOutcome:
+        return StepOutcome(
+            index=self.index,
+            kind=self.kind,
+            passed=passed,
+            started=self.start,
+            ended=ended,
+            source=self.source,
+            **measures,
+        )
+
+
+class _ReachRun(_Run):
     """Aim at a fixed point; pass once the effector stays within tolerance for ``hold`` s."""
 
     kind = "reach"
 
-    def __init__(self, index: int, step: ReachStep, start: float, previous: np.ndarray | None):
-        self.index, self.step, self.start = index, step, start
+    def __init__(self, index: int, source: int, step: ReachStep, start: float, previous) -> None:
+        super().__init__(index, source, start)
+        self.step = step
         self.point = np.array(step.reach, dtype=float)
         self.entered: float | None = None
         self.error = math.nan
@@ -70,27 +217,26 @@ class _ReachRun:
         if self.error <= self.step.tolerance:
             if self.entered is None:
                 self.entered = time
-            if time - self.entered >= self.step.hold - 1e-9:
+            if time - self.entered >= self.step.hold - _EPS:
                 self._finish(time, reached=True)
                 return True
         else:
             self.entered = None
-        if time - self.start >= self.step.timeout - 1e-9:
+        if time - self.start >= self.step.timeout - _EPS:
             self._finish(time, reached=False)
             return True
         return False
 
     def _finish(self, time: float, *, reached: bool, note: str = "") -> None:
-        self.done_as = StepOutcome(
-            index=self.index,
-            kind=self.kind,
-            passed=reached,
+        time_to_reach = (self.entered - self.start) if reached else None
+        self.done_as = self._outcome(
+            reached,
+            time,
             reached=reached,
-            time_to_reach=(self.entered - self.start) if reached else None,
+            time_to_reach=time_to_reach,
             final_error=self.error,
-            started=self.start,
-            ended=time,
             note=note if note else ("" if reached else "timed out"),
+            score=reach_score(time_to_reach, self.step.timeout),
         )
 
     def outcome(self, time: float) -> StepOutcome:
@@ -99,37 +245,97 @@ class _ReachRun:
         return self.done_as
 
 
-class _WaitRun:
-    """Keep the previous target for a while; always passes."""
+class _FollowRun(_Run):
+    """Aim at the path's start for ``lead_in`` s, then at a target moving along the path; the
+    tracking error is measured every tick of the motion and passes when its mean stays within
+    tolerance."""
 
-    kind = "wait"
+    kind = "follow"
 
-    def __init__(self, index: int, step: WaitStep, start: float, previous: np.ndarray | None):
-        self.index, self.step, self.start, self.point = index, step, start, previous
+    def __init__(self, index: int, source: int, step, start: float, previous) -> None:
+        super().__init__(index, source, start)
+        self.step = step
+        self.path = follow_path(step)
+        self.ease = EASINGS[step.easing]
+        self.duration = follow_duration(step)
+        self.moving_from = start + step.lead_in
+        self.point = np.array(self.path(0.0))
+        self.total = 0.0
+        self.samples = 0
+        self.worst = 0.0
+        self.error = math.nan
         self.ended: float | None = None
 
     def target(self, time: float) -> np.ndarray | None:
         return self.point
 
     def observe(self, time: float, dt: float, effector: np.ndarray) -> bool:
-        if time - self.start >= self.step.wait - 1e-9:
+        t = time - self.moving_from
+        if t > _EPS:
+            u = min(t / self.duration, 1.0)
+            self.point = np.array(self.path(self.duration * self.ease(u)))
+            self.error = float(np.hypot(*(effector - self.point)))
+            self.total += self.error
+            self.samples += 1
+            self.worst = max(self.worst, self.error)
+            if t >= self.duration - _EPS:
+                self.ended = time
+                return True
+        return False
+
+    def outcome(self, time: float) -> StepOutcome:
+        mean = self.total / self.samples if self.samples else None
+        if self.ended is None:
+            passed, note = False, "level ended first"
+        elif mean is not None and mean <= self.step.tolerance:
+            passed, note = True, ""
+        else:
+            passed, note = False, "mean tracking error above tolerance"
+        return self._outcome(
+            passed,
+            time if self.ended is None else self.ended,
+            final_error=self.error,
+            mean_error=mean,
+            max_error=self.worst if self.samples else None,
+            note=note,
+            score=follow_score(mean, self.step.tolerance) if passed else 0.0,
+        )
+
+
+class _WaitRun(_Run):
+    """Keep the previous target for a while; passes unless the level ends first."""
+
+    kind = "wait"
+
+    def __init__(self, index: int, source: int, step: WaitStep, start: float, previous) -> None:
+        super().__init__(index, source, start)
+        self.step, self.point = step, previous
+        self.ended: float | None = None
+
+    def target(self, time: float) -> np.ndarray | None:
+        return self.point
+
+    def observe(self, time: float, dt: float, effector: np.ndarray) -> bool:
+        if time - self.start >= self.step.wait - _EPS:
             self.ended = time
             return True
         return False
 
     def outcome(self, time: float) -> StepOutcome:
         ended = self.ended is not None
-        return StepOutcome(
-            self.index,
-            self.kind,
-            passed=ended,
-            started=self.start,
-            ended=self.ended if ended else time,
-            note="" if ended else "level ended first",
+        return self._outcome(
+            ended, self.ended if ended else time, note="" if ended else "level ended first"
         )
 
 
-_RUNS = {ReachStep: _ReachRun, WaitStep: _WaitRun}
+_RUNS = {
+    ReachStep: _ReachRun,
+    FollowLine: _FollowRun,
+    FollowCircle: _FollowRun,
+    FollowLissajous: _FollowRun,
+    FollowPolyline: _FollowRun,
+    WaitStep: _WaitRun,
+}
 
 
 class ScriptRunner:
@@ -144,8 +350,10 @@ class ScriptRunner:
     """
 
     def __init__(self, steps: list[Step] | tuple[Step, ...]) -> None:
-        self.steps = tuple(steps)
+        self.steps = expand_script(steps)
         self.outcomes: list[StepOutcome] = []
+        # Changes of set steps that began, oldest first, until take_changes().
+        self.pending: list[SetChanges] = []
         self._run = None
         self._begin(0, 0.0, None)
 
@@ -164,6 +372,16 @@ class ScriptRunner:
         """The point the chain should aim at now, px (None before any target is set)."""
         return self._target
 
+    def take_changes(self) -> list[SetChanges]:
+        """The changes of the ``set`` steps that began since the last call, oldest first.
+
+        >>> from ikgame.level.model import SetStep
+        >>> ScriptRunner([SetStep(set={"gain": 20.0})]).take_changes()[0].gain
+        20.0
+        """
+        changes, self.pending = self.pending, []
+        return changes
+
     def observe(self, time: float, dt: float, effector: np.ndarray) -> None:
         """Score the tick that just ended at ``time`` (s) with the effector at ``effector`` (px)."""
         if self._run is None:
@@ -178,14 +396,27 @@ class ScriptRunner:
         """End the script at ``time`` (s): unfinished steps fail. Returns every outcome."""
         while self._run is not None:
             self.outcomes.append(self._run.outcome(time))
-            self._begin(len(self.outcomes), time, self._target)
+            self._begin(len(self.outcomes), time, self._target, ended=True)
         return self.outcomes
 
-    def _begin(self, index: int, time: float, previous: np.ndarray | None) -> None:
+    def _begin(
+        self, index: int, time: float, previous: np.ndarray | None, *, ended: bool = False
+    ) -> None:
+        while index < len(self.steps) and isinstance(self.steps[index][1], SetStep):
+            source, step = self.steps[index]
+            if not ended:
+                self.pending.append(step.set)
+            note = "level ended first" if ended else ", ".join(sorted(step.set.model_fields_set))
+            self.outcomes.append(
+                StepOutcome(
+                    index, "set", not ended, started=time, ended=time, note=note, source=source
+                )
+            )
+            index += 1
         if index >= len(self.steps):
             self._run = None
             self._target = previous
             return
-        step = self.steps[index]
-        self._run = _RUNS[type(step)](index, step, time, previous)
+        source, step = self.steps[index]
+        self._run = _RUNS[type(step)](index, source, step, time, previous)
         self._target = self._run.target(time)

@@ -1,10 +1,15 @@
-"""The pymunk world of a level: a motorised chain, its joints and limits, and static obstacles.
+"""The pymunk world of a level: a motorised chain, its joints and limits, static obstacles and
+dynamic props.
 
 Each link is a dynamic body centred on the link, with a thick segment shape. Consecutive links
 are pinned by a ``PivotJoint``, driven by a ``SimpleMotor`` whose ``max_force`` is the joint's
 torque limit, and held in range by a ``RotaryLimitJoint`` where the level sets limits. Link 0
-hangs off a kinematic base body, so a script can move the base smoothly. Links of one chain
-never collide with each other; they do collide with obstacles.
+hangs off a kinematic base body, so a script can move the base smoothly (:meth:`World.move_base`).
+Links of one chain never collide with each other; they do collide with obstacles and props, and
+props collide with everything.
+
+pymunk bounces two shapes with the product of their elasticities. Links have 0 (they never
+bounce), obstacles 1, so a prop bounces off an obstacle with exactly its own elasticity.
 
 Angles are radians, lengths px, times s, world y up.
 """
@@ -12,13 +17,14 @@ Angles are radians, lengths px, times s, world y up.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass, replace
 from typing import Final
 
 import numpy as np
 import pymunk
 
 from ikgame.kinematics import Skeleton
-from ikgame.level.model import CircleObstacle, Level, SegmentObstacle
+from ikgame.level.model import BallProp, BoxProp, CircleObstacle, Level, SegmentObstacle
 
 __all__ = ["World", "build_skeleton"]
 
@@ -30,6 +36,18 @@ DIVERGENCE_LIMIT: Final = 1.0e6
 """A body farther than this from the origin (px), or turned this many radians, has blown up."""
 
 _CHAIN_GROUP: Final = 1
+_OBSTACLE_ELASTICITY: Final = 1.0
+"""So that a prop's own elasticity is its bounce off an obstacle (pymunk multiplies the two)."""
+
+
+@dataclass
+class _BaseMove:
+    """A move of the kinematic base under way: from ``start`` to ``end`` (px) in ``over`` s."""
+
+    start: np.ndarray
+    end: np.ndarray
+    over: float
+    elapsed: float = 0.0
 
 
 def build_skeleton(level: Level) -> Skeleton:
@@ -122,6 +140,13 @@ class World:
         for obstacle in level.obstacles:
             self.space.add(_obstacle_shape(self.space.static_body, obstacle))
 
+        self.prop_bodies: list[pymunk.Body] = []
+        for prop in level.props:
+            body, shape = _prop_body(prop)
+            self.space.add(body, shape)
+            self.prop_bodies.append(body)
+        self._base_move: _BaseMove | None = None
+
     @property
     def count(self) -> int:
         """Number of links."""
@@ -172,14 +197,43 @@ class World:
         """Change gravity from now on, px/s^2."""
         self.space.gravity = gravity
 
-    def move_base(self, velocity: tuple[float, float]) -> None:
-        """Move the kinematic base at ``velocity`` (px/s) until told otherwise."""
-        self.base_body.velocity = velocity
+    def move_base(self, to: tuple[float, float], over: float) -> None:
+        """Move the chain's base to ``to`` (px) over the next ``over`` seconds, then stop there.
+
+        The kinematic base body is given the velocity that keeps it on a smoothstep profile (at
+        rest at both ends, so the chain is not jerked), which pymunk integrates exactly; the last
+        step lands it on ``to``. :attr:`skeleton` follows the base while it moves.
+        """
+        if not (math.isfinite(over) and over > 0):
+            raise ValueError(f"over must be a positive number of seconds, got {over!r}")
+        start = np.array(self.base_body.position)
+        self._base_move = _BaseMove(start, np.asarray(to, dtype=float), float(over))
+
+    def prop_states(self) -> np.ndarray:
+        """(p, 3) each prop's ``(x, y, angle)``: centre in px, angle in radians."""
+        return np.array([(*b.position, b.angle) for b in self.prop_bodies], dtype=float).reshape(
+            -1, 3
+        )
 
     def step(self, dt: float) -> None:
         """Advance the world by ``dt`` seconds."""
         self.last_dt = dt
+        move = self._base_move
+        if move is None:
+            self.space.step(dt)
+            return
+        move.elapsed += dt
+        fraction = min(1.0, move.elapsed / move.over)
+        eased = fraction * fraction * (3.0 - 2.0 * fraction)
+        wanted = move.start + (move.end - move.start) * eased
+        self.base_body.velocity = tuple((wanted - np.array(self.base_body.position)) / dt)
         self.space.step(dt)
+        if fraction >= 1.0:
+            self.base_body.velocity = (0.0, 0.0)
+            self.base_body.position = tuple(move.end)
+            self._base_move = None
+        # Solvers need the base where it is now; the Skeleton is frozen, so a new one.
+        self.skeleton = replace(self.skeleton, base=np.array(self.base_body.position))
 
     def diverged(self) -> bool:
         """True when any body's pose is NaN, infinite, or absurdly far away.
@@ -200,4 +254,19 @@ def _obstacle_shape(
     else:
         shape = pymunk.Circle(static, obstacle.radius, obstacle.center)
     shape.friction = obstacle.friction
+    shape.elasticity = _OBSTACLE_ELASTICITY
     return shape
+
+
+def _prop_body(prop: BallProp | BoxProp) -> tuple[pymunk.Body, pymunk.Shape]:
+    if isinstance(prop, BallProp):
+        body = pymunk.Body(prop.mass, pymunk.moment_for_circle(prop.mass, 0.0, prop.radius))
+        shape: pymunk.Shape = pymunk.Circle(body, prop.radius)
+    else:
+        body = pymunk.Body(prop.mass, pymunk.moment_for_box(prop.mass, prop.size))
+        shape = pymunk.Poly.create_box(body, prop.size)
+    body.position = prop.position
+    body.angle = math.radians(prop.angle)
+    shape.friction = prop.friction
+    shape.elasticity = prop.elasticity
+    return body, shape
