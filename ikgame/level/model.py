@@ -287,7 +287,7 @@ class ChainConfig(_Model):
 class SegmentObstacle(_Model):
     """[[obstacles]] with kind = "segment": a static thick line."""
 
-    kind: Literal["segment"]
+    kind: Literal["segment"] = Field(description="Which kind of obstacle.")
     a: Vec2 = Field(description="One end, px.")
     b: Vec2 = Field(description="Other end, px.")
     radius: float = Field(
@@ -299,7 +299,7 @@ class SegmentObstacle(_Model):
 class CircleObstacle(_Model):
     """[[obstacles]] with kind = "circle": a static disc."""
 
-    kind: Literal["circle"]
+    kind: Literal["circle"] = Field(description="Which kind of obstacle.")
     center: Vec2 = Field(description="Centre, px.")
     radius: Length = Field(description="Radius, px.")
     friction: Friction = Field(0.8, description="Friction.")
@@ -328,7 +328,7 @@ class _Prop(_Model):
 class BallProp(_Prop):
     """[[props]] with kind = "ball": a dynamic disc the chain can push."""
 
-    kind: Literal["ball"]
+    kind: Literal["ball"] = Field(description="Which kind of prop.")
     radius: Annotated[float, Field(gt=0, le=1000, allow_inf_nan=False)] = Field(
         description="Radius, px."
     )
@@ -337,7 +337,7 @@ class BallProp(_Prop):
 class BoxProp(_Prop):
     """[[props]] with kind = "box": a dynamic rectangle the chain can push."""
 
-    kind: Literal["box"]
+    kind: Literal["box"] = Field(description="Which kind of prop.")
     size: tuple[
         Annotated[float, Field(gt=0, le=2000, allow_inf_nan=False)],
         Annotated[float, Field(gt=0, le=2000, allow_inf_nan=False)],
@@ -404,7 +404,7 @@ class _Follow(_Model):
 class FollowLine(_Follow):
     """[[script]] with follow = "line": the target runs from one point to another."""
 
-    follow: Literal["line"]
+    follow: Literal["line"] = Field(description="The shape of the path.")
     from_: Vec2 = Field(alias="from", description="Start point, px.")
     to: Vec2 = Field(description="End point, px.")
 
@@ -412,7 +412,7 @@ class FollowLine(_Follow):
 class FollowCircle(_Follow):
     """[[script]] with follow = "circle": the target goes round a circle."""
 
-    follow: Literal["circle"]
+    follow: Literal["circle"] = Field(description="The shape of the path.")
     center: Vec2 = Field(description="Centre, px.")
     radius: Length = Field(description="Radius, px.")
     period: Seconds = Field(description="Time for one turn, s.")
@@ -424,7 +424,7 @@ class FollowLissajous(_Follow):
     """[[script]] with follow = "lissajous": x = ax sin(2 pi fx s + phase), y = ay sin(2 pi fy s)
     about the centre (fx = 1, fy = 2 traces a figure-eight)."""
 
-    follow: Literal["lissajous"]
+    follow: Literal["lissajous"] = Field(description="The shape of the path.")
     center: Vec2 = Field(description="Centre, px.")
     amplitude: tuple[
         Annotated[float, Field(ge=0, le=MAX_COORD, allow_inf_nan=False)],
@@ -442,7 +442,7 @@ class FollowLissajous(_Follow):
 class FollowPolyline(_Follow):
     """[[script]] with follow = "polyline": the target runs along straight pieces at a speed."""
 
-    follow: Literal["polyline"]
+    follow: Literal["polyline"] = Field(description="The shape of the path.")
     points: list[Vec2] = Field(
         min_length=2, max_length=MAX_POINTS, description="Corner points, in order, px."
     )
@@ -595,13 +595,21 @@ class Level(_Model):
     50.0
     """
 
-    level: LevelInfo
-    world: WorldConfig = WorldConfig()
-    chain: ChainConfig
-    obstacles: list[Obstacle] = Field(default_factory=list, max_length=MAX_OBSTACLES)
-    props: list[Prop] = Field(default_factory=list, max_length=MAX_PROPS)
-    goals: list[Goal] = Field(default_factory=list, max_length=MAX_GOALS)
-    script: list[Step] = Field(min_length=1, max_length=MAX_STEPS)
+    level: LevelInfo = Field(description="Name, description, duration, expected status.")
+    world: WorldConfig = Field(WorldConfig(), description="Gravity, damping, clocks, camera.")
+    chain: ChainConfig = Field(description="The motorised chain and its controller.")
+    obstacles: list[Obstacle] = Field(
+        default_factory=list, max_length=MAX_OBSTACLES, description="Static obstacles."
+    )
+    props: list[Prop] = Field(
+        default_factory=list, max_length=MAX_PROPS, description="Dynamic bodies the chain can push."
+    )
+    goals: list[Goal] = Field(
+        default_factory=list, max_length=MAX_GOALS, description="Regions props must end inside."
+    )
+    script: list[Step] = Field(
+        min_length=1, max_length=MAX_STEPS, description="The steps, run in order."
+    )
 
     @model_validator(mode="after")
     def _consistent(self) -> Level:
