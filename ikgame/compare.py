@@ -1,0 +1,750 @@
+"""Compare IK solvers on one level, in the physics world: who gets there first, how precisely,
+by how direct a path, how smoothly, and at what cost per tick.
+
+Solvers differ in more than their kinematic answer: the chain has mass, motors have torque and
+speed limits, and the controller re-solves from the measured pose every tick. So the fair
+comparison runs the whole level once per solver, in the same world, and measures the motion
+the chain actually makes. :func:`compare_level` does that and returns a :class:`Comparison`;
+:func:`write_comparison` writes ``compare.json`` and ``compare.png``; :func:`comparison_table`
+is the table the ``ikgame compare`` command prints.
+
+Everything in a comparison is deterministic for a given level except the wall-clock timing of
+the solver calls, which ``compare.json`` keeps apart under ``wall_clock``.
+
+Units: time s, lengths and errors px, angles rad.
+"""
+
+from __future__ import annotations
+
+import io
+import math
+import time
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Final
+
+import numpy as np
+from PIL import Image, ImageDraw, ImageFont
+from rich.table import Table
+
+from ikgame._files import write_atomic, write_json
+from ikgame.kinematics import SOLVERS, Skeleton, Solution
+from ikgame.level.model import Level
+from ikgame.level.script import StepOutcome
+from ikgame.physics.world import World
+from ikgame.sim import Simulation
+
+__all__ = [
+    "DEFAULT_SOLVERS",
+    "SOLVER_COLOURS",
+    "Comparison",
+    "SolverRun",
+    "compare_level",
+    "comparison_table",
+    "render_comparison",
+    "squared_jerk",
+    "write_comparison",
+]
+
+_SEED_ORDER: Final = ("ccd", "jacobian_transpose", "dls", "fabrik")
+
+DEFAULT_SOLVERS: Final = tuple(n for n in _SEED_ORDER if n in SOLVERS) + tuple(
+    n for n in SOLVERS if n not in _SEED_ORDER
+)
+"""Every registered solver: the seed's two first (CCD, then Jacobian transpose), then DLS and
+FABRIK, then any solver registered later."""
+
+SOLVER_COLOURS: Final[Mapping[str, tuple[int, int, int]]] = {
+    "ccd": (213, 94, 0),
+    "jacobian_transpose": (0, 114, 178),
+    "dls": (0, 158, 115),
+    "fabrik": (204, 121, 167),
+}
+"""Line colour per solver (Okabe-Ito, readable with colour-blindness), fixed so that one solver
+has the same colour in every figure."""
+
+_EXTRA_COLOURS: Final = ((230, 159, 0), (86, 180, 233), (120, 120, 120), (0, 0, 0))
+"""For solvers registered later than this module was written."""
+
+SUPERSAMPLE: Final = 3
+"""The plot is drawn this many times larger and shrunk: Pillow's lines are not anti-aliased."""
+
+ERROR_FLOOR: Final = 0.01
+"""px: the log error axis starts no lower than this (an error of 0 would be at minus infinity)."""
+
+_WALL_CLOCK_NOTE: Final = (
+    "values under 'wall_clock' are wall-clock measurements on the machine that made this file "
+    "and vary from run to run; everything else is deterministic for the level"
+)
+_UNITS: Final = {
+    "sim_time": "s",
+    "time_to_reach": "s",
+    "final_error": "px",
+    "mean_error": "px",
+    "tracking_error": "px",
+    "path_length": "px",
+    "mean_squared_jerk": "rad^2/s^6",
+    "torque_limited": "share of joint-ticks",
+    "solver_us_per_tick": "us",
+}
+
+
+@dataclass(frozen=True, eq=False)
+class SolverRun:
+    """One solver's run of a level, and what it measured.
+
+    Attributes:
+        solver: the solver's registry name.
+        status: ``passed``, ``failed`` or ``diverged``, as in ``results.json``.
+        steps: per-step outcomes (time to reach in s, final and mean error in px).
+        ticks: physics ticks run.
+        sim_time: simulated time the level took, s.
+        path_length: distance the end effector travelled, px (sum of per-tick displacements).
+        mean_squared_jerk: mean over ticks of the summed squared jerk of the joint angles,
+            rad^2/s^6 (NaN with fewer than four poses).
+        tracking_error: mean error over the follow steps weighted by their duration, px; None
+            when the level has no follow step.
+        iterations_per_tick: mean solver iterations per solver call.
+        torque_limited: share of joint-ticks with the motor at its torque limit (0..1): where the
+            physics, not the solver, set the pace.
+        solver_calls: how many times the solver was called (once per tick with a target).
+        solver_us_per_tick: mean wall-clock time of one solver call, microseconds; varies from
+            run to run (None without a call).
+        times: (ticks,) simulated time at the end of each tick, s (a diverged run keeps the
+            ticks before the one that blew up; so do ``errors``, ``path`` and ``targets``).
+        errors: (ticks,) end-effector distance to the target after each tick, px (NaN without
+            a target).
+        path: (ticks + 1, 2) end-effector position at the start and after each tick, px.
+        angles: (ticks + 1, n) measured local joint angles at the start and after each tick, rad.
+        targets: (ticks, 2) the target during each tick, px (NaN without a target).
+    """
+
+    solver: str
+    status: str
+    steps: tuple[StepOutcome, ...]
+    ticks: int
+    sim_time: float
+    path_length: float
+    mean_squared_jerk: float
+    tracking_error: float | None
+    iterations_per_tick: float
+    torque_limited: float
+    solver_calls: int
+    solver_us_per_tick: float | None
+    times: np.ndarray
+    errors: np.ndarray
+    path: np.ndarray
+    angles: np.ndarray
+    targets: np.ndarray
+
+    def as_dict(self) -> dict[str, object]:
+        """Plain data in a fixed key order; timing under ``wall_clock``."""
+        return {
+            "status": self.status,
+            "steps_passed": sum(s.passed for s in self.steps),
+            "steps_total": len(self.steps),
+            "ticks": self.ticks,
+            "sim_time": _plain(self.sim_time),
+            "path_length": _plain(self.path_length),
+            "mean_squared_jerk": _plain(self.mean_squared_jerk),
+            "tracking_error": _plain(self.tracking_error),
+            "iterations_per_tick": _plain(self.iterations_per_tick),
+            "torque_limited": _plain(self.torque_limited),
+            "solver_calls": self.solver_calls,
+            "steps": [s.as_dict() for s in self.steps],
+            "wall_clock": {"solver_us_per_tick": _plain(self.solver_us_per_tick)},
+        }
+
+
+@dataclass(frozen=True, eq=False)
+class Comparison:
+    """Several solvers' runs of one level, plus what the plot needs of the level.
+
+    Attributes:
+        level: the level's name.
+        tick_rate: physics ticks per second.
+        runs: one :class:`SolverRun` per solver, in the order asked for.
+        base: where the chain is mounted, px.
+        reach: the chain's length, px.
+        start_pose: (n + 1, 2) joint positions then the end effector before the first tick, px.
+        reach_points: (k, 2) the reach targets in the order the script ran them, px.
+        tolerance: the reach steps' arrival tolerance, px, when they share one (else None).
+    """
+
+    level: str
+    tick_rate: int
+    runs: tuple[SolverRun, ...]
+    base: tuple[float, float]
+    reach: float
+    start_pose: np.ndarray
+    reach_points: np.ndarray
+    tolerance: float | None
+
+    def run(self, solver: str) -> SolverRun:
+        """The run of ``solver``; ValueError if it was not compared."""
+        for run in self.runs:
+            if run.solver == solver:
+                return run
+        raise ValueError(
+            f"solver {solver!r} is not in this comparison; it has: "
+            + ", ".join(r.solver for r in self.runs)
+        )
+
+    def as_dict(self) -> dict[str, object]:
+        """The content of ``compare.json``: plain data in a fixed key order."""
+        return {
+            "level": self.level,
+            "tick_rate": self.tick_rate,
+            "note": _WALL_CLOCK_NOTE,
+            "units": dict(_UNITS),
+            "solvers": {run.solver: run.as_dict() for run in self.runs},
+        }
+
+
+def compare_level(
+    level: Level,
+    solvers: Sequence[str] = DEFAULT_SOLVERS,
+    progress: Callable[[float], None] | None = None,
+) -> Comparison:
+    """Run ``level`` once per solver in the physics world and measure each run.
+
+    Smoothness is the mean squared jerk of the joint angles: the third finite difference of the
+    per-tick joint angle series divided by dt^3, squared, summed over joints and averaged over
+    ticks, in rad^2/s^6. Lower is smoother. Solver time is the mean wall-clock time of the
+    solver call alone (physics and bookkeeping excluded), in microseconds.
+    ``progress(fraction)`` is called now and then with the fraction of the work done.
+
+    >>> lvl = Level.model_validate({"level": {"name": "x", "duration": 0.1},
+    ...     "chain": {"links": [{"length": 80.0, "repeat": 2}]}, "script": [{"reach": [90, 60]}]})
+    >>> [run.ticks for run in compare_level(lvl, ["ccd", "dls"]).runs]
+    [24, 24]
+    """
+    names = _check_solvers(solvers)
+    runs = []
+    for index, name in enumerate(names):
+        report = None
+        if progress is not None:
+            report = _scaled(progress, index / len(names), 1 / len(names))
+        runs.append(_run_solver(level, name, report))
+    if progress is not None:
+        progress(1.0)
+    world = World(level)
+    tolerances = {step.tolerance for step in level.script if hasattr(step, "tolerance")}
+    return Comparison(
+        level=level.level.name,
+        tick_rate=level.world.tick_rate,
+        runs=tuple(runs),
+        base=(float(level.chain.base[0]), float(level.chain.base[1])),
+        reach=world.skeleton.reach,
+        start_pose=world.joint_positions(),
+        reach_points=_reach_points(runs[0]),
+        tolerance=tolerances.pop() if len(tolerances) == 1 else None,
+    )
+
+
+def _step_ticks(run: SolverRun, step: StepOutcome) -> np.ndarray:
+    """Which of the run's ticks belong to ``step`` (a tick belongs to the step it ended in)."""
+    ended = run.sim_time if step.ended is None else step.ended
+    return (run.times > step.started + 1e-9) & (run.times <= ended + 1e-9)
+
+
+def _reach_points(run: SolverRun) -> np.ndarray:
+    """The reach targets in the order the script ran them, read off the run itself (so the
+    picture needs to know nothing of how a level spells its steps)."""
+    points = []
+    for step in run.steps:
+        if step.kind == "reach":
+            targets = run.targets[_step_ticks(run, step)]
+            targets = targets[np.all(np.isfinite(targets), axis=1)]
+            if len(targets):
+                points.append(targets[0])
+    return np.array(points, dtype=float).reshape(-1, 2)
+
+
+def _check_solvers(solvers: Sequence[str]) -> tuple[str, ...]:
+    valid = ", ".join(SOLVERS)
+    if isinstance(solvers, str):
+        raise ValueError(f"solvers must be a list of names, not the string {solvers!r}")
+    names = tuple(solvers)
+    if not names:
+        raise ValueError(f"name at least one solver; valid solvers: {valid}")
+    unknown = [name for name in names if name not in SOLVERS]
+    if unknown:
+        raise ValueError(f"unknown solver {unknown[0]!r}; valid solvers: {valid}")
+    if len(set(names)) != len(names):
+        raise ValueError(f"each solver may be compared once, got {list(names)}")
+    return names
+
+
+def _scaled(progress: Callable[[float], None], start: float, span: float):
+    return lambda fraction: progress(start + span * fraction)
+
+
+class _TimedSolve:
+    """A solver function that also adds up the wall-clock time of its calls.
+
+    The timing hook: :class:`~ikgame.control.controller.Controller` calls ``self.solve`` once per
+    tick with a target, so replacing that attribute with this wrapper times the solver alone.
+    ``Simulation(level, solver=name)`` pins the solver for the run (a level's ``set`` steps do
+    not switch it), so nothing replaces the wrapper once it is in place.
+    """
+
+    def __init__(self, solve: Callable[..., Solution]) -> None:
+        self.solve = solve
+        self.calls = 0
+        self.iterations = 0
+        self.nanoseconds = 0
+
+    def __call__(
+        self,
+        skeleton: Skeleton,
+        angles: np.ndarray,
+        target: np.ndarray,
+        *,
+        max_iterations: int,
+        tolerance: float,
+    ) -> Solution:
+        start = time.perf_counter_ns()
+        solution = self.solve(
+            skeleton, angles, target, max_iterations=max_iterations, tolerance=tolerance
+        )
+        self.nanoseconds += time.perf_counter_ns() - start
+        self.calls += 1
+        self.iterations += solution.iterations
+        return solution
+
+
+def _run_solver(level: Level, name: str, progress: Callable[[float], None] | None) -> SolverRun:
+    sim = Simulation(level, solver=name, record=False)
+    timed = _TimedSolve(sim.controller.solve)
+    sim.controller.solve = timed
+    times, errors, targets = [], [], []
+    limited = 0
+    path = [sim.world.end_effector()]
+    angles = [sim.joint_angles()]
+    total = round(level.level.duration * level.world.tick_rate)
+    report_every = max(1, total // 100)
+    while not sim.done:
+        target = sim.target
+        info = sim.step()
+        if sim.diverged:
+            # The blown-up tick's pose is meaningless; the run ends at the last sane one.
+            break
+        times.append(info.time)
+        errors.append(info.error)
+        limited += int(info.torque_limited.sum())
+        targets.append((math.nan, math.nan) if target is None else target)
+        path.append(sim.world.end_effector())
+        angles.append(sim.joint_angles())
+        if progress is not None and sim.tick % report_every == 0:
+            progress(sim.tick / total)
+    result = sim.result
+    path_arr = np.array(path, dtype=float)
+    angles_arr = np.array(angles, dtype=float)
+    return SolverRun(
+        solver=name,
+        status=result.status,
+        steps=result.steps,
+        ticks=result.ticks,
+        sim_time=result.sim_time,
+        path_length=float(np.hypot(*np.diff(path_arr, axis=0).T).sum()),
+        mean_squared_jerk=_mean_squared_jerk(angles_arr, sim.dt),
+        tracking_error=_tracking_error(result.steps),
+        iterations_per_tick=timed.iterations / timed.calls if timed.calls else 0.0,
+        torque_limited=limited / max(1, len(times) * sim.world.count),
+        solver_calls=timed.calls,
+        solver_us_per_tick=timed.nanoseconds / timed.calls / 1e3 if timed.calls else None,
+        times=np.array(times, dtype=float),
+        errors=np.array(errors, dtype=float),
+        path=path_arr,
+        angles=angles_arr,
+        targets=np.array(targets, dtype=float).reshape(-1, 2),
+    )
+
+
+def squared_jerk(angles: np.ndarray, dt: float) -> np.ndarray:
+    """Summed squared jerk of a joint angle series, one value per four consecutive poses.
+
+    ``angles`` is (k, n), one row per tick ``dt`` s apart (radians); entry ``i`` of the result
+    is the sum over joints of ``(third finite difference of rows i..i+3 / dt^3)^2``, rad^2/s^6.
+    :attr:`SolverRun.mean_squared_jerk` is its mean.
+
+    >>> squared_jerk(np.array([[0.0], [0.0], [0.0], [1.0]]), 0.5).tolist()
+    [64.0]
+    """
+    angles = np.asarray(angles, dtype=float)
+    if angles.ndim != 2:
+        raise ValueError(f"angles must be (ticks, joints), got shape {angles.shape}")
+    if not (math.isfinite(dt) and dt > 0):
+        raise ValueError(f"dt must be a positive number of seconds, got {dt!r}")
+    # Free joints are read wrapped to [-pi, pi]; a wrap is not motion.
+    jerk = np.diff(np.unwrap(angles, axis=0), n=3, axis=0) / dt**3
+    return (jerk**2).sum(axis=1)
+
+
+def _mean_squared_jerk(angles: np.ndarray, dt: float) -> float:
+    """Mean over ticks of :func:`squared_jerk`, rad^2/s^6 (NaN with fewer than four poses)."""
+    return float(squared_jerk(angles, dt).mean()) if len(angles) >= 4 else math.nan
+
+
+def _tracking_error(steps: Sequence[StepOutcome]) -> float | None:
+    follows = [s for s in steps if s.kind == "follow" and s.mean_error is not None]
+    if not follows:
+        return None
+    weights = [max((s.ended or s.started) - s.started, 0.0) for s in follows]
+    if sum(weights) == 0.0:
+        return float(np.mean([s.mean_error for s in follows]))
+    return float(np.average([s.mean_error for s in follows], weights=weights))
+
+
+def _plain(value: float | None) -> float | None:
+    """Six significant digits: enough for any of these measurements, and stable in JSON."""
+    if value is None or not math.isfinite(value):
+        return None
+    return float(f"{value:.6g}")
+
+
+def write_comparison(out_dir: str | Path, comparison: Comparison) -> list[Path]:
+    """Write ``compare.json`` and ``compare.png`` into ``out_dir``, each atomically.
+
+    >>> write_comparison  # doctest: +ELLIPSIS
+    <function write_comparison at ...>
+    """
+    out = Path(out_dir)
+    if out.exists() and not out.is_dir():
+        raise ValueError(f"{out} exists and is not a folder")
+    buffer = io.BytesIO()
+    render_comparison(comparison).save(buffer, format="PNG", optimize=True)
+    return [
+        write_json(out / "compare.json", comparison.as_dict()),
+        write_atomic(out / "compare.png", buffer.getvalue()),
+    ]
+
+
+def comparison_table(comparison: Comparison) -> Table:
+    """A rich table with one row per solver: status, time to reach each target (s), mean final
+    error of the reach steps (px), tracking error (px, when the level has follow steps), path
+    length (px), mean squared jerk (rad^2/s^6) and solver time (us per tick).
+
+    >>> comparison_table  # doctest: +ELLIPSIS
+    <function comparison_table at ...>
+    """
+    steps = comparison.runs[0].steps
+    reach_steps = [s.index for s in steps if s.kind == "reach"]
+    tracking = any(run.tracking_error is not None for run in comparison.runs)
+    table = Table(title=f"{comparison.level}: solver comparison", show_edge=False)
+    table.add_column("solver")
+    table.add_column("status")
+    for number, _ in enumerate(reach_steps, start=1):
+        table.add_column(f"reach {number} (s)", justify="right")
+    table.add_column("final error (px)", justify="right")
+    if tracking:
+        table.add_column("tracking error (px)", justify="right")
+    for column in ("path (px)", "jerk (rad²/s⁶)", "solver (µs/tick)", "sim time (s)"):
+        table.add_column(column, justify="right")
+    colour = {"passed": "green", "failed": "yellow", "diverged": "red"}
+    for run in comparison.runs:
+        by_index = {s.index: s for s in run.steps}
+        times = [_fmt(by_index[i].time_to_reach, ".2f", "failed") for i in reach_steps]
+        finals = [by_index[i].final_error for i in reach_steps]
+        finals = [e for e in finals if e is not None and math.isfinite(e)]
+        cells = [
+            run.solver,
+            f"[{colour.get(run.status, 'white')}]{run.status}[/]",
+            *times,
+            _fmt(float(np.mean(finals)) if finals else None, ".2f"),
+        ]
+        if tracking:
+            cells.append(_fmt(run.tracking_error, ".2f"))
+        cells += [
+            _fmt(run.path_length, ".0f"),
+            _fmt(run.mean_squared_jerk, ".3g"),
+            _fmt(run.solver_us_per_tick, ".0f"),
+            f"{run.sim_time:.2f}",
+        ]
+        table.add_row(*cells)
+    return table
+
+
+def _fmt(value: float | None, spec: str, missing: str = "-") -> str:
+    if value is None or not math.isfinite(value):
+        return missing
+    return format(value, spec)
+
+
+# --- the picture -------------------------------------------------------------------------------
+# Sizes in output pixels; _Canvas multiplies by SUPERSAMPLE.
+
+_INK: Final = (40, 40, 40)
+_MUTED: Final = (110, 110, 110)
+_GRID: Final = (228, 228, 228)
+_FAINT: Final = (200, 200, 200)
+_BACKGROUND: Final = (255, 255, 255)
+_MIN_SIZE: Final = (480, 240)
+_MAX_SIZE: Final = (4000, 3000)
+
+
+class _Canvas:
+    """An ImageDraw that takes output-pixel coordinates and draws at SUPERSAMPLE times them."""
+
+    def __init__(self, size: tuple[int, int], background: tuple[int, int, int]) -> None:
+        self.image = Image.new("RGB", (size[0] * SUPERSAMPLE, size[1] * SUPERSAMPLE), background)
+        self.draw = ImageDraw.Draw(self.image)
+
+    def line(self, points: Sequence[tuple[float, float]], colour, width: float = 1.0) -> None:
+        scaled = [(x * SUPERSAMPLE, y * SUPERSAMPLE) for x, y in points]
+        self.draw.line(scaled, fill=colour, width=max(1, round(width * SUPERSAMPLE)), joint="curve")
+
+    def dashed(self, a: tuple[float, float], b: tuple[float, float], colour, dash: float = 6.0):
+        length = math.dist(a, b)
+        count = max(1, int(length / dash))
+        for i in range(0, count, 2):
+            t0, t1 = i / count, min(i + 1, count) / count
+            self.line([_lerp(a, b, t0), _lerp(a, b, t1)], colour)
+
+    def circle(self, centre, radius: float, *, fill=None, outline=None, width: float = 1.0):
+        x, y, r = (v * SUPERSAMPLE for v in (*centre, radius))
+        self.draw.ellipse(
+            (x - r, y - r, x + r, y + r),
+            fill=fill,
+            outline=outline,
+            width=max(1, round(width * SUPERSAMPLE)),
+        )
+
+    def rect(self, box, *, fill=None, outline=None, width: float = 1.0) -> None:
+        self.draw.rectangle(
+            [v * SUPERSAMPLE for v in box],
+            fill=fill,
+            outline=outline,
+            width=max(1, round(width * SUPERSAMPLE)),
+        )
+
+    def text(self, xy, text: str, colour=_INK, size: float = 13, anchor: str = "la") -> None:
+        self.draw.text(
+            (xy[0] * SUPERSAMPLE, xy[1] * SUPERSAMPLE),
+            text,
+            fill=colour,
+            font=_font(round(size * SUPERSAMPLE)),
+            anchor=anchor,
+        )
+
+    def text_width(self, text: str, size: float = 13) -> float:
+        return self.draw.textlength(text, font=_font(round(size * SUPERSAMPLE))) / SUPERSAMPLE
+
+    def finish(self) -> Image.Image:
+        width, height = self.image.size
+        return self.image.resize(
+            (width // SUPERSAMPLE, height // SUPERSAMPLE), Image.Resampling.LANCZOS
+        )
+
+
+def _font(size: int) -> ImageFont.FreeTypeFont | ImageFont.ImageFont:
+    if size not in _FONTS:
+        _FONTS[size] = ImageFont.load_default(size=size)
+    return _FONTS[size]
+
+
+_FONTS: dict[int, ImageFont.FreeTypeFont | ImageFont.ImageFont] = {}
+
+
+def _lerp(a, b, t: float) -> tuple[float, float]:
+    return (a[0] + (b[0] - a[0]) * t, a[1] + (b[1] - a[1]) * t)
+
+
+def _colour(comparison: Comparison, solver: str) -> tuple[int, int, int]:
+    if solver in SOLVER_COLOURS:
+        return SOLVER_COLOURS[solver]
+    others = [r.solver for r in comparison.runs if r.solver not in SOLVER_COLOURS]
+    return _EXTRA_COLOURS[others.index(solver) % len(_EXTRA_COLOURS)]
+
+
+def render_comparison(comparison: Comparison, size: tuple[int, int] = (1200, 560)) -> Image.Image:
+    """The comparison as a picture: error against time per solver (left), paths (right).
+
+    The left panel plots the end-effector error (px, log scale: errors span from hundreds of px
+    down to fractions of one) against simulated time, one coloured line per solver, with the
+    reach tolerance dashed. The right panel draws each solver's end-effector path in its own
+    small map, all at one scale, with the start pose, the base and the numbered targets.
+
+    >>> render_comparison  # doctest: +ELLIPSIS
+    <function render_comparison at ...>
+    """
+    width, height = _check_size(size)
+    canvas = _Canvas((width, height), _BACKGROUND)
+    canvas.text((16, 12), f"{comparison.level}: solver comparison", size=17)
+    split = round(width * 0.5)
+    _legend(canvas, comparison, (16, 42), split - 24)
+    _error_panel(canvas, comparison, (66, 94, split - 24, height - 48))
+    _path_panels(canvas, comparison, (split + 8, 12, width - 12, height - 12))
+    return canvas.finish()
+
+
+def _check_size(size: object) -> tuple[int, int]:
+    try:
+        width, height = size  # type: ignore[misc]
+    except (TypeError, ValueError):
+        raise ValueError(f"size must be (width, height) in px, got {size!r}") from None
+    for value in (width, height):
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise ValueError(f"size must be two ints, got {size!r}")
+    if not (_MIN_SIZE[0] <= width <= _MAX_SIZE[0] and _MIN_SIZE[1] <= height <= _MAX_SIZE[1]):
+        raise ValueError(
+            f"size must be from {_MIN_SIZE[0]}x{_MIN_SIZE[1]} to {_MAX_SIZE[0]}x{_MAX_SIZE[1]} "
+            f"px, got {width}x{height}"
+        )
+    return width, height
+
+
+def _error_panel(canvas: _Canvas, comparison: Comparison, box) -> None:
+    left, top, right, bottom = box
+    finite = np.concatenate([r.errors[np.isfinite(r.errors)] for r in comparison.runs])
+    positive = finite[finite > 0]
+    low = max(ERROR_FLOOR, float(positive.min()) if positive.size else 1.0)
+    high = float(finite.max()) if finite.size else 10.0
+    if comparison.tolerance is not None:
+        high = max(high, comparison.tolerance)
+    lo_exp, hi_exp = math.floor(math.log10(low)), math.ceil(math.log10(high))
+    hi_exp = max(hi_exp, lo_exp + 1)
+    t_max = max((r.sim_time for r in comparison.runs), default=1.0) or 1.0
+
+    def px(t: float, e: float) -> tuple[float, float]:
+        frac = (math.log10(max(e, 10.0**lo_exp)) - lo_exp) / (hi_exp - lo_exp)
+        return (left + (right - left) * t / t_max, bottom - (bottom - top) * frac)
+
+    for exp in range(lo_exp, hi_exp + 1):
+        y = px(0.0, 10.0**exp)[1]
+        canvas.line([(left, y), (right, y)], _GRID)
+        canvas.text((left - 7, y), _decade_label(exp), _MUTED, 12, "rm")
+        for minor in range(2, 10) if exp < hi_exp else ():
+            ym = px(0.0, minor * 10.0**exp)[1]
+            canvas.line([(left - 3, ym), (left, ym)], _FAINT)
+    step = _nice_step(t_max / 6)
+    for i in range(int(t_max / step + 1e-9) + 1):
+        x = px(i * step, 1.0)[0]
+        canvas.line([(x, top), (x, bottom)], _GRID)
+        canvas.line([(x, bottom), (x, bottom + 4)], _INK)
+        canvas.text((x, bottom + 7), f"{i * step:g}", _MUTED, 12, "ma")
+    canvas.line([(left, top), (left, bottom), (right, bottom)], _INK)
+    canvas.text((left - 50, top - 22), "end-effector error (px, log scale)", _INK, 13)
+    canvas.text(((left + right) / 2, bottom + 25), "simulated time (s)", _INK, 13, "ma")
+    if comparison.tolerance is not None:
+        y = px(0.0, comparison.tolerance)[1]
+        canvas.dashed((left, y), (right, y), _MUTED)
+        canvas.text((right - 4, y - 3), f"tolerance {comparison.tolerance:g} px", _MUTED, 11, "rb")
+    # The first solver is drawn last, on top: it is usually the reference.
+    for run in reversed(comparison.runs):
+        for segment in _finite_segments(run.times, run.errors):
+            canvas.line([px(t, e) for t, e in segment], _colour(comparison, run.solver), 1.6)
+
+
+def _legend(canvas: _Canvas, comparison: Comparison, top_left, right: float) -> None:
+    """One entry per solver (line, name, status), flowing left to right, wrapping at ``right``."""
+    x, y = top_left
+    for run in comparison.runs:
+        text = f"{run.solver} ({run.status}, {run.sim_time:.2f} s)"
+        entry = 30 + canvas.text_width(text, 12) + 18
+        if x > top_left[0] and x + entry > right:
+            x, y = top_left[0], y + 18
+        canvas.line([(x, y), (x + 24, y)], _colour(comparison, run.solver), 3.0)
+        canvas.text((x + 30, y), text, _INK, 12, "lm")
+        x += entry
+
+
+def _finite_segments(times: np.ndarray, values: np.ndarray) -> list[list[tuple[float, float]]]:
+    """Runs of consecutive finite samples: a tick without a target breaks the line."""
+    segments, current = [], []
+    for t, v in zip(times.tolist(), values.tolist(), strict=True):
+        if math.isfinite(v):
+            current.append((t, v))
+        elif current:
+            segments.append(current)
+            current = []
+    if current:
+        segments.append(current)
+    return [s if len(s) > 1 else s * 2 for s in segments]
+
+
+def _decade_label(exp: int) -> str:
+    return f"{10.0**exp:g}" if -3 <= exp <= 4 else f"1e{exp}"
+
+
+def _nice_step(raw: float) -> float:
+    """The smallest of 1, 2, 5 x 10^k at least ``raw``."""
+    base = 10.0 ** math.floor(math.log10(raw))
+    return next(m * base for m in (1, 2, 5, 10) if m * base >= raw - 1e-12)
+
+
+def _path_panels(canvas: _Canvas, comparison: Comparison, box) -> None:
+    left, top, right, bottom = box
+    count = len(comparison.runs)
+    cols = 1 if count == 1 else 2
+    rows = math.ceil(count / cols)
+    gap = 10
+    cell_w = (right - left - gap * (cols - 1)) / cols
+    cell_h = (bottom - top - gap * (rows - 1)) / rows
+    points = [comparison.start_pose, comparison.reach_points, np.array([comparison.base])]
+    points += [run.path for run in comparison.runs]
+    every = np.concatenate([p.reshape(-1, 2) for p in points])
+    every = every[np.all(np.isfinite(every), axis=1)]
+    lo, hi = every.min(axis=0), every.max(axis=0)
+    span = np.maximum(hi - lo, 1.0)
+    header, margin = 22, 20  # px: the cell's title row; room for target numbers at the edges
+    scale = min((cell_w - 2 * margin) / span[0], (cell_h - header - 2 * margin) / span[1])
+    for i, run in enumerate(comparison.runs):
+        x0 = left + (i % cols) * (cell_w + gap)
+        y0 = top + (i // cols) * (cell_h + gap)
+        centre = np.array([x0 + cell_w / 2, y0 + header + (cell_h - header) / 2])
+        mid = (lo + hi) / 2
+
+        def to_px(p, centre=centre, mid=mid) -> list[tuple[float, float]]:
+            p = np.asarray(p, dtype=float).reshape(-1, 2)
+            x = centre[0] + (p[:, 0] - mid[0]) * scale
+            y = centre[1] - (p[:, 1] - mid[1]) * scale
+            return list(zip(x.tolist(), y.tolist(), strict=True))
+
+        _path_cell(canvas, comparison, run, (x0, y0, x0 + cell_w, y0 + cell_h), to_px, scale)
+
+
+def _path_cell(canvas: _Canvas, comparison: Comparison, run: SolverRun, box, to_px, scale):
+    x0, y0, x1, y1 = box
+    colour = _colour(comparison, run.solver)
+    canvas.rect(box, outline=_FAINT)
+    canvas.text((x0 + 8, y0 + 6), run.solver, colour, 14)
+    room = x1 - x0 - 24 - canvas.text_width(run.solver, 14)
+    for info in (f"path {run.path_length:.0f} px, {run.status}", f"{run.path_length:.0f} px"):
+        if canvas.text_width(info, 12) <= room:
+            canvas.text((x1 - 8, y0 + 7), info, _MUTED, 12, "ra")
+            break
+    # Content is clipped to the cell by drawing it on a sub-canvas of the cell's size.
+    cell = _Canvas((round(x1 - x0) - 2, round(y1 - y0) - 24), _BACKGROUND)
+
+    def local(points) -> list[tuple[float, float]]:
+        return [(x - x0 - 1, y - y0 - 23) for x, y in to_px(points)]
+
+    base = local(comparison.base)[0]
+    cell.circle(base, comparison.reach * scale, outline=_GRID)
+    cell.line(local(comparison.start_pose), _FAINT, 4.0)
+    # A wide pale band under the effector's line: the route the target took.
+    for trail in _moving_targets(run):
+        cell.line(local(trail), _GRID, 7.0)
+    cell.line(local(run.path), colour, 1.5)
+    cell.circle(local(run.path[-1])[0], 3.0, fill=colour)
+    cell.rect((base[0] - 4, base[1] - 4, base[0] + 4, base[1] + 4), fill=_INK)
+    for number, point in enumerate(local(comparison.reach_points), start=1):
+        cell.circle(point, 6.0, outline=_INK, width=1.5)
+        cell.text((point[0] + 8, point[1] - 8), str(number), _INK, 12, "lb")
+    canvas.image.paste(cell.image, (round((x0 + 1) * SUPERSAMPLE), round((y0 + 23) * SUPERSAMPLE)))
+
+
+def _moving_targets(run: SolverRun) -> list[np.ndarray]:
+    """The target's path during each step whose target moves (a follow step), px."""
+    trails = []
+    for step in run.steps:
+        if step.kind == "reach":
+            continue
+        targets = run.targets[_step_ticks(run, step)]
+        targets = targets[np.all(np.isfinite(targets), axis=1)]
+        if len(targets) > 1 and np.ptp(targets, axis=0).max() > 0.0:
+            trails.append(targets)
+    return trails

@@ -1,0 +1,203 @@
+"""Solver comparison: one run per solver, sane metrics, deterministic JSON, a readable plot."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+from PIL import Image
+from rich.console import Console
+
+from ikgame.compare import (
+    DEFAULT_SOLVERS,
+    SOLVER_COLOURS,
+    _mean_squared_jerk,
+    _tracking_error,
+    compare_level,
+    comparison_table,
+    render_comparison,
+    squared_jerk,
+    write_comparison,
+)
+from ikgame.kinematics import SOLVERS
+from ikgame.level.model import Level
+from ikgame.level.script import StepOutcome
+
+FIRST_TARGET = (180.0, 120.0)
+TOLERANCE = 6.0
+
+SHORT_LEVEL = {
+    "level": {"name": "Compare test", "duration": 3.0},
+    "world": {"gravity": [0.0, 0.0], "tick_rate": 120},
+    "chain": {"links": [{"length": 80.0, "limits": [-150.0, 150.0], "repeat": 3}]},
+    "script": [
+        {"reach": list(FIRST_TARGET), "tolerance": TOLERANCE, "hold": 0.2, "timeout": 1.5},
+        {"reach": [-120.0, 150.0], "tolerance": TOLERANCE, "hold": 0.2, "timeout": 1.5},
+    ],
+}
+
+
+def _level(**changes: object) -> Level:
+    return Level.model_validate({**SHORT_LEVEL, **changes})
+
+
+@pytest.fixture(scope="module")
+def comparison():
+    return compare_level(_level())
+
+
+def _without_wall_clock(data: dict) -> dict:
+    for run in data["solvers"].values():
+        del run["wall_clock"]
+    return data
+
+
+def test_default_compares_every_registered_solver_seed_pair_first():
+    assert sorted(DEFAULT_SOLVERS) == sorted(SOLVERS)
+    assert DEFAULT_SOLVERS[:2] == ("ccd", "jacobian_transpose")
+
+
+def test_one_run_per_solver_in_the_order_asked(comparison):
+    assert [run.solver for run in comparison.runs] == list(DEFAULT_SOLVERS)
+    assert comparison.run("dls").solver == "dls"
+
+
+def test_targets_and_tolerance_are_read_off_the_level(comparison):
+    np.testing.assert_allclose(comparison.reach_points, [FIRST_TARGET, (-120.0, 150.0)])
+    assert comparison.tolerance == TOLERANCE
+
+
+def test_metrics_are_finite_and_sensible(comparison):
+    start = comparison.start_pose[-1]
+    straight = math.dist(start, FIRST_TARGET)
+    for run in comparison.runs:
+        assert run.status in {"passed", "failed", "diverged"}
+        assert len(run.steps) == 2
+        assert run.ticks == len(run.times) == len(run.errors) == len(run.path) - 1
+        assert run.angles.shape == (run.ticks + 1, 3)
+        assert 0.0 < run.sim_time <= 3.0 + 1e-9
+        assert run.path_length >= straight - TOLERANCE, run.solver
+        assert math.isfinite(run.mean_squared_jerk) and run.mean_squared_jerk >= 0.0
+        assert run.tracking_error is None  # no follow step in this level
+        assert run.solver_calls == run.ticks  # a target every tick
+        assert run.iterations_per_tick >= 0.0
+        assert 0.0 <= run.torque_limited <= 1.0
+        assert run.solver_us_per_tick is not None and run.solver_us_per_tick > 0.0
+        np.testing.assert_allclose(run.path[0], start)
+        for step in run.steps:
+            if step.reached:
+                assert 0.0 <= step.time_to_reach <= 1.5
+                assert step.final_error <= TOLERANCE
+
+
+def test_compare_json_is_deterministic_apart_from_wall_clock(comparison, tmp_path):
+    again = compare_level(_level())
+    first = json.loads(write_comparison(tmp_path / "a", comparison)[0].read_text())
+    second = json.loads(write_comparison(tmp_path / "b", again)[0].read_text())
+    assert list(first) == ["level", "tick_rate", "note", "units", "solvers"]
+    assert list(first["solvers"]) == list(DEFAULT_SOLVERS)
+    assert "wall_clock" in first["note"]
+    assert _without_wall_clock(first) == _without_wall_clock(second)
+
+
+def test_write_comparison_writes_json_and_png_of_the_default_size(comparison, tmp_path):
+    paths = write_comparison(tmp_path / "out", comparison)
+    assert [p.name for p in paths] == ["compare.json", "compare.png"]
+    with Image.open(paths[1]) as image:
+        assert image.size == (1200, 560)
+
+
+def test_plot_has_the_requested_size_and_every_solver_colour(comparison):
+    image = render_comparison(comparison, size=(900, 420))
+    assert image.size == (900, 420)
+    pixels = np.asarray(image.convert("RGB"), dtype=int).reshape(-1, 3)
+    assert len(np.unique(pixels, axis=0)) > 50  # not blank
+    for solver in DEFAULT_SOLVERS:
+        distance = np.abs(pixels - SOLVER_COLOURS[solver]).sum(axis=1)
+        assert (distance < 30).sum() > 100, solver
+
+
+def test_table_has_a_row_per_solver(comparison):
+    console = Console(width=240, record=True)
+    console.print(comparison_table(comparison))
+    text = console.export_text()
+    for solver in DEFAULT_SOLVERS:
+        assert solver in text
+    assert "reach 2 (s)" in text and "µs/tick" in text
+
+
+def test_ticks_without_a_target_break_the_error_line_and_skip_the_solver():
+    level = _level(
+        level={"name": "wait first", "duration": 1.0},
+        script=[{"wait": 0.25}, {"reach": list(FIRST_TARGET)}],
+    )
+    run = compare_level(level, ["ccd"]).runs[0]
+    assert np.isnan(run.errors[:30]).all() and np.isfinite(run.errors[-1])
+    assert run.solver_calls == run.ticks - 30
+    assert render_comparison(compare_level(level, ["ccd"])).size == (1200, 560)
+
+
+def test_progress_rises_to_one():
+    seen = []
+    compare_level(_level(level={"name": "p", "duration": 0.5}), ["ccd", "fabrik"], seen.append)
+    assert seen == sorted(seen) and seen[-1] == 1.0 and 0.4 < seen[len(seen) // 2] < 0.6
+
+
+@pytest.mark.parametrize(
+    ("solvers", "message"),
+    [
+        (["ccd", "newton"], "unknown solver 'newton'; valid solvers: "),
+        ([], "name at least one solver"),
+        ("ccd", "a list of names, not the string"),
+        (["dls", "dls"], "each solver may be compared once"),
+    ],
+)
+def test_bad_solver_lists_are_refused(solvers, message):
+    with pytest.raises(ValueError, match=message) as info:
+        compare_level(_level(), solvers)
+    if "unknown" in message:
+        assert all(name in str(info.value) for name in SOLVERS)
+
+
+def test_asking_for_a_solver_not_compared_names_the_compared_ones(comparison):
+    with pytest.raises(ValueError, match="has: ccd, jacobian_transpose, dls, fabrik"):
+        comparison.run("newton")
+
+
+@pytest.mark.parametrize("size", [(100, 100), (1200.0, 560), "big", (1200,)])
+def test_bad_plot_sizes_are_refused(comparison, size):
+    with pytest.raises(ValueError, match="size must be"):
+        render_comparison(comparison, size=size)
+
+
+def test_jerk_of_a_cubic_is_six_per_joint_squared():
+    dt = 0.01
+    t = np.arange(10) * dt
+    angles = np.stack([t**3, -(t**3)], axis=1)  # d^3/dt^3 = +-6 rad/s^3
+    assert _mean_squared_jerk(angles, dt) == pytest.approx(72.0)
+    assert math.isnan(_mean_squared_jerk(angles[:3], dt))
+
+
+def test_jerk_ignores_the_wrap_of_a_free_joint():
+    steady = np.array([[3.12], [3.16], [3.20], [3.24]])  # 0.04 rad/tick, through pi
+    angles = (steady + np.pi) % (2 * np.pi) - np.pi
+    assert angles[-1, 0] < 0.0
+    assert _mean_squared_jerk(angles, 1.0) == pytest.approx(0.0, abs=1e-6)
+
+
+@pytest.mark.parametrize(("angles", "dt"), [(np.zeros(5), 0.1), (np.zeros((5, 2)), 0.0)])
+def test_squared_jerk_refuses_bad_input(angles, dt):
+    with pytest.raises(ValueError, match="must be"):
+        squared_jerk(angles, dt)
+
+
+def test_tracking_error_is_the_duration_weighted_mean_of_follow_steps():
+    steps = [
+        StepOutcome(0, "reach", True, True, 0.5, 1.0, mean_error=50.0, ended=1.0),
+        StepOutcome(1, "follow", True, mean_error=2.0, started=1.0, ended=2.0),
+        StepOutcome(2, "follow", True, mean_error=5.0, started=2.0, ended=5.0),
+    ]
+    assert _tracking_error(steps) == pytest.approx((2.0 * 1 + 5.0 * 3) / 4)
+    assert _tracking_error(steps[:1]) is None
