@@ -97,6 +97,7 @@ class SolverRun:
     Attributes:
         solver: the solver's registry name.
         status: ``passed``, ``failed`` or ``diverged``, as in ``results.json``.
+        score: the run's score, 0..100, as in ``results.json``.
         steps: per-step outcomes (time to reach in s, final and mean error in px).
         ticks: physics ticks run.
         sim_time: simulated time the level took, s.
@@ -122,6 +123,7 @@ class SolverRun:
 
     solver: str
     status: str
+    score: float
     steps: tuple[StepOutcome, ...]
     ticks: int
     sim_time: float
@@ -142,6 +144,7 @@ class SolverRun:
         """Plain data in a fixed key order; timing under ``wall_clock``."""
         return {
             "status": self.status,
+            "score": _plain(self.score),
             "steps_passed": sum(s.passed for s in self.steps),
             "steps_total": len(self.steps),
             "ticks": self.ticks,
@@ -345,6 +348,7 @@ def _run_solver(level: Level, name: str, progress: Callable[[float], None] | Non
     return SolverRun(
         solver=name,
         status=result.status,
+        score=result.score,
         steps=result.steps,
         ticks=result.ticks,
         sim_time=result.sim_time,
@@ -423,9 +427,9 @@ def write_comparison(out_dir: str | Path, comparison: Comparison) -> list[Path]:
 
 
 def comparison_table(comparison: Comparison) -> Table:
-    """A rich table with one row per solver: status, time to reach each target (s), mean final
-    error of the reach steps (px), tracking error (px, when the level has follow steps), path
-    length (px), mean squared jerk (rad^2/s^6) and solver time (us per tick).
+    """A rich table with one row per solver: status, score, time to reach each target (s), mean
+    final error of the reach steps (px), tracking error (px, when the level has follow steps),
+    path length (px), mean squared jerk (rad^2/s^6), solver time (us per tick) and sim time (s).
 
     >>> comparison_table  # doctest: +ELLIPSIS
     <function comparison_table at ...>
@@ -436,6 +440,7 @@ def comparison_table(comparison: Comparison) -> Table:
     table = Table(title=f"{comparison.level}: solver comparison", show_edge=False)
     table.add_column("solver")
     table.add_column("status")
+    table.add_column("score", justify="right")
     for number, _ in enumerate(reach_steps, start=1):
         table.add_column(f"reach {number} (s)", justify="right")
     table.add_column("final error (px)", justify="right")
@@ -452,6 +457,7 @@ def comparison_table(comparison: Comparison) -> Table:
         cells = [
             run.solver,
             f"[{colour.get(run.status, 'white')}]{run.status}[/]",
+            f"{run.score:.0f}",
             *times,
             _fmt(float(np.mean(finals)) if finals else None, ".2f"),
         ]

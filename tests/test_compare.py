@@ -74,6 +74,7 @@ def test_metrics_are_finite_and_sensible(comparison):
     straight = math.dist(start, FIRST_TARGET)
     for run in comparison.runs:
         assert run.status in {"passed", "failed", "diverged"}
+        assert 0.0 <= run.score <= 100.0
         assert len(run.steps) == 2
         assert run.ticks == len(run.times) == len(run.errors) == len(run.path) - 1
         assert run.angles.shape == (run.ticks + 1, 3)
