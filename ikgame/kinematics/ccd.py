@@ -37,6 +37,8 @@ CCDResult = SolveStatus
 """The article's name for the three iteration states: ``SUCCESS``, ``PROCESSING``, ``FAILURE``."""
 
 _TWO_PI: Final = 2.0 * math.pi
+_NUDGE: Final = 0.05
+"""Bend (radians per joint) that gets a stalled, straight chain off its own line."""
 
 
 def wrap_angle(angle: float) -> float:
@@ -194,6 +196,10 @@ class _Chain:
         self.base_y = float(skeleton.base[1])
         self.base_angle = skeleton.base_angle
 
+    def within_reach(self, tx: float, ty: float) -> bool:
+        """True when the target is strictly closer to the base than the chain's full length."""
+        return math.hypot(tx - self.base_x, ty - self.base_y) < sum(self.lengths)
+
     def joints(self, angles: list[float]) -> tuple[list[float], list[float]]:
         """World x and y of every joint, then the end effector."""
         xs = [self.base_x]
@@ -268,9 +274,15 @@ def solve_ccd(
     error_sqr = (xs[-1] - tx) ** 2 + (ys[-1] - ty) ** 2
     status = SolveStatus.SUCCESS if error_sqr <= tolerance * tolerance else SolveStatus.PROCESSING
     used = 0
+    nudged = False
     while used < max_iterations and status is SolveStatus.PROCESSING:
         status, current, _ = chain.iterate(current, tx, ty, tolerance * tolerance)
         used += 1
+        if status is SolveStatus.FAILURE and not nudged and chain.within_reach(tx, ty):
+            # A straight chain aimed along its own line has no rotation to make: every joint
+            # sees the end and the target on one ray. Bend it once and carry on.
+            current = skeleton.clamp(np.asarray(current) + _NUDGE).tolist()
+            status, nudged = SolveStatus.PROCESSING, True
     if used:
         # The pass tracks the end by rotations, which drifts from forward kinematics by
         # rounding; the reported error is the pose's own.

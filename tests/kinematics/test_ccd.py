@@ -672,3 +672,18 @@ def test_solve_ccd_respects_limits_and_stays_finite(problem):
     assert solution.error == pytest.approx(math.dist(points[-1], target), rel=1e-9, abs=1e-6)
     if solution.status is SolveStatus.PROCESSING:
         assert solution.iterations == iterations
+
+
+@pytest.mark.parametrize("target", [(150.0, 0.0), (-150.0, 0.0), (0.0, 0.0)])
+def test_solve_ccd_escapes_a_straight_chain_aimed_along_its_own_line(target):
+    # Every joint sees the end and the target on one ray: plain CCD has nothing to rotate.
+    chain = Skeleton.chain([100.0, 100.0, 100.0])
+    angles, status = np.zeros(3), SolveStatus.PROCESSING
+    for _ in range(20):
+        status, angles = ccd_iteration_limited(chain, angles, np.array(target), 0.5)
+        if status is not SolveStatus.PROCESSING:
+            break
+    assert status is SolveStatus.FAILURE
+    solution = solve_ccd(chain, np.zeros(3), np.array(target), max_iterations=20, tolerance=0.5)
+    assert solution.status is SolveStatus.SUCCESS
+    assert solution.error <= 0.5
