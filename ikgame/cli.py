@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 import re
+import sys
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -16,10 +17,14 @@ from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
 from rich.table import Table
 
 import ikgame
-from ikgame._files import write_json
+from ikgame._files import write_atomic, write_json
+from ikgame.compare import compare_level, comparison_table, write_comparison
 from ikgame.level.library import DEFAULT_LEVEL, resolve_level
 from ikgame.level.loader import LevelError, load_level
 from ikgame.level.model import SOLVER_NAMES
+from ikgame.level.tools import level_rows, schema_text, validate_files
+from ikgame.render.export import check_out_dir, export_run, parse_size
+from ikgame.render.theme import available_themes, load_theme
 from ikgame.sim import RunResult, Simulation
 
 __all__ = ["main"]
@@ -40,7 +45,12 @@ examples:
   ikgame run levels/02_tentacle.toml --no-frames
   ikgame run my_level.toml --solver dls --out /tmp/try --force
 
-writes DIR/results.json (status, per-step outcomes), and unless --no-frames the frames.
+writes into DIR:
+  results.json   status (passed / failed / diverged), per-step outcomes, score
+  frames/        000000.png, 000001.png ... one per recorded frame (level fps)
+  run.gif        the whole run, looping
+  motion.json    baked motion: per frame every joint's angle and position, for a game engine
+  run.png        an animated PNG (with --apng)     sheet.png  a contact sheet (with --sheet)
 exit codes: 0 the run completed (whatever its status), 2 bad input, 1 internal error.
 """
 
@@ -105,10 +115,77 @@ def _parser() -> argparse.ArgumentParser:
         help="IK solver, overriding the level's own choice",
     )
     run.add_argument("--no-frames", action="store_true", help="write results only, no pictures")
+    run.add_argument("--no-gif", action="store_true", help="skip run.gif")
+    run.add_argument("--apng", action="store_true", help="also write run.png, an animated PNG")
+    run.add_argument("--sheet", action="store_true", help="also write sheet.png, a contact sheet")
+    run.add_argument(
+        "--size", default="960x540", metavar="WxH", help="frame size in pixels (default: 960x540)"
+    )
+    run.add_argument(
+        "--theme",
+        default="light",
+        metavar="NAME",
+        help=f"colour theme: {', '.join(available_themes())}, or a theme JSON file (default: light)",
+    )
+    run.add_argument(
+        "--workers", type=int, metavar="N", help="processes drawing frames (default: automatic)"
+    )
     run.add_argument("--quiet", action="store_true", help="print nothing but errors")
     run.add_argument("--force", action="store_true", help="write into a non-empty output folder")
     run.add_argument("--debug", action="store_true", help="show tracebacks of internal errors")
     run.set_defaults(handler=_cmd_run)
+
+    compare = sub.add_parser(
+        "compare",
+        help="run a level once per solver and compare them",
+        description="Run a level once per IK solver in the physics world; write compare.json "
+        "and compare.png (error against time, end-effector paths) and print a table.",
+        epilog="example:\n  ikgame compare 02_tentacle --solvers ccd,dls --out /tmp/cmp\n\n"
+        "timings (solver us/tick) are wall-clock measurements and vary from run to run;\n"
+        "everything else in compare.json is deterministic.",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    compare.add_argument("level", nargs="?", metavar="LEVEL", help="a level file or shipped name")
+    compare.add_argument(
+        "--solvers",
+        default=",".join(SOLVER_NAMES),
+        metavar="LIST",
+        help=f"comma-separated solvers (default: {','.join(SOLVER_NAMES)})",
+    )
+    compare.add_argument("--out", metavar="DIR", type=Path, help="default: runs/<level>-compare")
+    compare.add_argument("--force", action="store_true", help="write into a non-empty folder")
+    compare.add_argument("--quiet", action="store_true", help="print nothing but errors")
+    compare.add_argument("--debug", action="store_true", help="show tracebacks of internal errors")
+    compare.set_defaults(handler=_cmd_compare)
+
+    validate = sub.add_parser(
+        "validate",
+        help="check level files and list every problem",
+        description="Check level files without running them. Every problem is listed with the "
+        "file, the line, the field and what was expected.",
+        epilog="example:\n  ikgame validate levels/*.toml my_level.toml\n\n"
+        "exit codes: 0 all valid, 2 problems found.",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    validate.add_argument("files", nargs="+", metavar="FILE", help="level files or folders")
+    validate.add_argument("--quiet", action="store_true", help="print nothing but problems")
+    validate.set_defaults(handler=_cmd_validate)
+
+    listing = sub.add_parser(
+        "list",
+        help="list the shipped levels",
+        description="The shipped levels in learning order: run one with 'ikgame run NAME'.",
+    )
+    listing.set_defaults(handler=_cmd_list)
+
+    schema = sub.add_parser(
+        "schema",
+        help="print the JSON Schema of the level format",
+        description="Print (or write) the JSON Schema of level files, for editors that "
+        "autocomplete and check TOML against a schema (see docs/levels.md).",
+    )
+    schema.add_argument("--out", metavar="FILE", type=Path, help="write it to FILE instead")
+    schema.set_defaults(handler=_cmd_schema)
     return parser
 
 
@@ -120,14 +197,105 @@ def _cmd_run(args: argparse.Namespace) -> int:
     level_path = resolve_level(args.level)
     level = load_level(level_path)
     out = args.out if args.out is not None else Path("runs") / _slug(level.level.name)
-    _check_out_dir(out, args.force)
+    # Every option is checked before anything is written: bad input leaves no half-made folder.
+    with _usage("--out"):
+        check_out_dir(out, args.force)
+    with _usage("--size"):
+        size = parse_size(args.size)
+    with _usage("--theme"):
+        theme = load_theme(args.theme)
+    if args.workers is not None and args.workers < 1:
+        raise UsageError(f"--workers: must be at least 1, got {args.workers}")
     console = Console(quiet=args.quiet, highlight=False)
     sim = Simulation(level, solver=args.solver, record=not args.no_frames)
     with _progress(console, "simulating") as update:
         result = sim.run(update)
-    write_json(out / "results.json", _results(result, level_path, args))
-    _print_summary(console, result, out)
+    written = []
+    if not args.no_frames:
+        written = export_run(
+            out,
+            sim.scene,
+            sim.snapshots,
+            size=size,
+            theme=theme,
+            gif=not args.no_gif,
+            apng=args.apng,
+            sheet=args.sheet,
+            workers=args.workers,
+            progress=console.is_terminal and not args.quiet,
+        )
+    written.append(write_json(out / "results.json", _results(result, level_path, args)))
+    _print_summary(console, result, out, written)
     return EXIT_OK
+
+
+def _cmd_compare(args: argparse.Namespace) -> int:
+    level = load_level(resolve_level(args.level))
+    solvers = [name.strip() for name in args.solvers.split(",") if name.strip()]
+    unknown = [name for name in solvers if name not in SOLVER_NAMES]
+    if unknown or not solvers:
+        raise UsageError(
+            f"--solvers: unknown solver {', '.join(map(repr, unknown)) or '(none given)'}; "
+            f"choose from: {', '.join(SOLVER_NAMES)}"
+        )
+    out = args.out if args.out is not None else Path("runs") / f"{_slug(level.level.name)}-compare"
+    with _usage("--out"):
+        check_out_dir(out, args.force)
+    console = Console(quiet=args.quiet, highlight=False)
+    with _progress(console, "comparing") as update:
+        comparison = compare_level(level, solvers, progress=update)
+    written = write_comparison(out, comparison)
+    console.print(comparison_table(comparison))
+    console.print(f"wrote {out}/: {', '.join(p.name for p in written)}")
+    return EXIT_OK
+
+
+def _cmd_validate(args: argparse.Namespace) -> int:
+    console = Console(quiet=args.quiet, highlight=False)
+    paths = [resolve_level(name) for name in args.files]
+    problems = validate_files(paths)
+    if problems:
+        raise LevelError(problems)
+    count = sum(len(list(p.glob("*.toml"))) if p.is_dir() else 1 for p in paths)
+    console.print(f"{count} level file{'s' if count != 1 else ''} valid")
+    return EXIT_OK
+
+
+def _cmd_list(args: argparse.Namespace) -> int:
+    console = Console(highlight=False)
+    for row in level_rows():
+        ends = "" if row["expect"] == "passed" else f", meant to end {row['expect']}"
+        console.print(
+            f"[bold]{Path(str(row['file'])).stem}[/]  {row['name']}  [dim]({row['links']} links, "
+            f"{row['steps']} steps, {row['solver']}{ends})[/]"
+        )
+        console.print(f"    {row['description']}", soft_wrap=False)
+    console.print("\nrun one with: ikgame run NAME   (for example: ikgame run 02_tentacle)")
+    return EXIT_OK
+
+
+def _cmd_schema(args: argparse.Namespace) -> int:
+    text = schema_text()
+    if args.out is None:
+        sys.stdout.write(text)
+    else:
+        write_atomic(args.out, text.encode("utf-8"))
+    return EXIT_OK
+
+
+class _usage:
+    """Turn a ValueError from checking an option into a UsageError naming the option."""
+
+    def __init__(self, option: str) -> None:
+        self.option = option
+
+    def __enter__(self) -> None:
+        return None
+
+    def __exit__(self, kind: type | None, exc: BaseException | None, tb: object) -> bool:
+        if isinstance(exc, ValueError) and not isinstance(exc, UsageError | LevelError):
+            raise UsageError(f"{self.option}: {exc}") from None
+        return False
 
 
 def _results(result: RunResult, level_path: Path, args: argparse.Namespace) -> dict[str, object]:
@@ -136,13 +304,6 @@ def _results(result: RunResult, level_path: Path, args: argparse.Namespace) -> d
     options.update({"level_file": level_path.name, "solver_override": args.solver})
     data["options"] = options
     return data
-
-
-def _check_out_dir(out: Path, force: bool) -> None:
-    if out.exists() and not out.is_dir():
-        raise UsageError(f"--out {out}: exists and is not a folder")
-    if out.is_dir() and any(out.iterdir()) and not force:
-        raise UsageError(f"--out {out}: folder is not empty (use --force to write into it)")
 
 
 class _progress:
@@ -169,7 +330,7 @@ class _progress:
         self.bar.__exit__(*exc)
 
 
-def _print_summary(console: Console, result: RunResult, out: Path) -> None:
+def _print_summary(console: Console, result: RunResult, out: Path, written: list[Path]) -> None:
     colour = {"passed": "green", "failed": "yellow", "diverged": "red"}[result.status]
     console.print(
         f"[bold]{result.level}[/] ({result.solver}): [bold {colour}]{result.status}[/] "
@@ -187,4 +348,7 @@ def _print_summary(console: Console, result: RunResult, out: Path) -> None:
             "-" if step.final_error is None else f"{step.final_error:.1f}",
         )
     console.print(table)
-    console.print(f"results: {out / 'results.json'}")
+    frames = sum(1 for p in written if p.parent.name == "frames")
+    others = [p.name for p in written if p.parent.name != "frames"]
+    listed = ([f"frames/ ({frames} PNG)"] if frames else []) + others
+    console.print(f"wrote {out}/: {', '.join(listed)}")

@@ -42,7 +42,7 @@ def test_bad_level_exits_2_with_file_line_and_field(tmp_path, capsys):
     bad = tmp_path / "bad.toml"
     bad.write_text(
         '[level]\nname = "x"\nduration = 5\n[chain]\n[[chain.links]]\nlength = -3\n'
-        '[[script]]\nreach = [1, 2]\n'
+        "[[script]]\nreach = [1, 2]\n"
     )
     out = tmp_path / "out"
     assert main(["run", str(bad), "--out", str(out)]) == 2
@@ -75,3 +75,90 @@ def test_console_script_runs_as_a_module(tmp_path):
     )
     assert proc.returncode == 2
     assert "Traceback" not in proc.stderr
+
+
+def test_run_writes_frames_gif_and_motion_that_show_the_chain_moving(tmp_path):
+    from PIL import Image, ImageChops
+
+    out = tmp_path / "run"
+    assert main(["run", "--quiet", "--size", "160x90", "--workers", "1", "--out", str(out)]) == 0
+    frames = sorted((out / "frames").glob("*.png"))
+    results = json.loads((out / "results.json").read_text())
+    options = results["options"]
+    # One frame at each t = k / fps before the run's end: ceil(ticks x fps / tick_rate).
+    assert len(frames) == -(-results["ticks"] * options["fps"] // options["tick_rate"])
+    assert frames[0].name == "000000.png"
+    first, last = Image.open(frames[0]), Image.open(frames[-1])
+    assert first.size == (160, 90)
+    assert len(first.convert("RGB").getcolors(10_000)) > 2  # not blank
+    assert ImageChops.difference(first.convert("RGB"), last.convert("RGB")).getbbox() is not None
+    gif = Image.open(out / "run.gif")
+    assert gif.is_animated and gif.n_frames > 1
+    motion = json.loads((out / "motion.json").read_text())
+    assert len(motion["frames"]) == len(frames)
+
+
+def test_two_runs_give_byte_identical_frames(tmp_path):
+    for name in ("a", "b"):
+        args = ["run", "--quiet", "--no-gif", "--size", "96x54", "--out", str(tmp_path / name)]
+        assert main(args) == 0
+    a = sorted((tmp_path / "a/frames").iterdir())
+    b = sorted((tmp_path / "b/frames").iterdir())
+    assert [p.name for p in a] == [p.name for p in b]
+    assert all(x.read_bytes() == y.read_bytes() for x, y in zip(a, b, strict=True))
+
+
+@pytest.mark.parametrize(
+    ("option", "message"),
+    [
+        (["--size", "0x0"], "--size: size 0x0 is out of range"),
+        (["--size", "big"], "--size: size must be WIDTHxHEIGHT"),
+        (["--theme", "neon"], "--theme: unknown theme 'neon'; available: dark, light"),
+        (["--workers", "0"], "--workers: must be at least 1"),
+    ],
+)
+def test_bad_options_exit_2_and_write_nothing(tmp_path, capsys, option, message):
+    out = tmp_path / "out"
+    assert main(["run", "--out", str(out), *option]) == 2
+    assert message in capsys.readouterr().err
+    assert not out.exists()
+
+
+def test_validate_lists_every_problem_and_exits_2(tmp_path, capsys):
+    bad = tmp_path / "bad.toml"
+    bad.write_text('[level]\nname = "x"\nduration = -1\n[chain]\n[[chain.links]]\nlength = 0\n')
+    assert main(["validate", str(ROOT / "levels"), str(bad)]) == 2
+    err = capsys.readouterr().err.splitlines()
+    assert f"error: {bad}:3: level.duration: Input should be greater than 0 (got -1)" in err
+    assert f"error: {bad}:6: chain.links[0].length: Input should be greater than 0 (got 0)" in err
+    assert f"error: {bad}: script: Field required" in err
+
+
+def test_validate_shipped_levels_exits_0(capsys):
+    assert main(["validate", str(ROOT / "levels")]) == 0
+    count = len(list((ROOT / "levels").glob("*.toml")))
+    assert f"{count} level files valid" in capsys.readouterr().out
+
+
+def test_list_shows_every_shipped_level(capsys):
+    assert main(["list"]) == 0
+    out = capsys.readouterr().out
+    for path in (ROOT / "levels").glob("*.toml"):
+        assert path.stem in out
+
+
+def test_schema_matches_the_shipped_copy(tmp_path):
+    out = tmp_path / "schema.json"
+    assert main(["schema", "--out", str(out)]) == 0
+    assert out.read_bytes() == (ROOT / "assets" / "level.schema.json").read_bytes()
+
+
+def test_compare_writes_json_and_png_and_rejects_unknown_solvers(tmp_path, capsys):
+    out = tmp_path / "cmp"
+    assert main(["compare", "03_elbow_limits", "--solvers", "ccd,dls", "--out", str(out)]) == 0
+    data = json.loads((out / "compare.json").read_text())
+    assert list(data["solvers"]) == ["ccd", "dls"]
+    assert (out / "compare.png").stat().st_size > 0
+    assert main(["compare", "--solvers", "ccd,magic", "--out", str(tmp_path / "x")]) == 2
+    assert "unknown solver 'magic'" in capsys.readouterr().err
+    assert not (tmp_path / "x").exists()
