@@ -428,8 +428,9 @@ def write_comparison(out_dir: str | Path, comparison: Comparison) -> list[Path]:
 
 def comparison_table(comparison: Comparison) -> Table:
     """A rich table with one row per solver: status, score, time to reach each target (s), mean
-    final error of the reach steps (px), tracking error (px, when the level has follow steps),
-    path length (px), mean squared jerk (rad^2/s^6), solver time (us per tick) and sim time (s).
+    final error of the reach steps (px, when the level has some), tracking error (px, when it has
+    follow steps), path length (px), mean squared jerk (rad^2/s^6), solver time (us per tick)
+    and sim time (s).
 
     >>> comparison_table  # doctest: +ELLIPSIS
     <function comparison_table at ...>
@@ -443,7 +444,8 @@ def comparison_table(comparison: Comparison) -> Table:
     table.add_column("score", justify="right")
     for number, _ in enumerate(reach_steps, start=1):
         table.add_column(f"reach {number} (s)", justify="right")
-    table.add_column("final error (px)", justify="right")
+    if reach_steps:
+        table.add_column("final error (px)", justify="right")
     if tracking:
         table.add_column("tracking error (px)", justify="right")
     for column in ("path (px)", "jerk (rad²/s⁶)", "solver (µs/tick)", "sim time (s)"):
@@ -459,8 +461,9 @@ def comparison_table(comparison: Comparison) -> Table:
             f"[{colour.get(run.status, 'white')}]{run.status}[/]",
             f"{run.score:.0f}",
             *times,
-            _fmt(float(np.mean(finals)) if finals else None, ".2f"),
         ]
+        if reach_steps:
+            cells.append(_fmt(float(np.mean(finals)) if finals else None, ".2f"))
         if tracking:
             cells.append(_fmt(run.tracking_error, ".2f"))
         cells += [

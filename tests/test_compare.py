@@ -14,6 +14,7 @@ from ikgame.compare import (
     DEFAULT_SOLVERS,
     SOLVER_COLOURS,
     _mean_squared_jerk,
+    _moving_targets,
     _tracking_error,
     compare_level,
     comparison_table,
@@ -138,6 +139,33 @@ def test_ticks_without_a_target_break_the_error_line_and_skip_the_solver():
     assert np.isnan(run.errors[:30]).all() and np.isfinite(run.errors[-1])
     assert run.solver_calls == run.ticks - 30
     assert render_comparison(compare_level(level, ["ccd"])).size == (1200, 560)
+
+
+def test_a_follow_step_gives_a_tracking_error_and_a_target_trail():
+    level = _level(
+        level={"name": "follow", "duration": 2.0},
+        script=[
+            {
+                "follow": "circle",
+                "center": [0.0, 150.0],
+                "radius": 40.0,
+                "period": 1.0,
+                "duration": 1.0,
+                "lead_in": 0.25,
+            }
+        ],
+    )
+    comparison = compare_level(level, ["ccd", "dls"])
+    for run in comparison.runs:
+        assert run.tracking_error is not None and 0.0 <= run.tracking_error < 40.0
+        (trail,) = _moving_targets(run)
+        np.testing.assert_allclose(np.hypot(trail[:, 0], trail[:, 1] - 150.0), 40.0)
+    assert comparison.reach_points.shape == (0, 2)
+    console = Console(width=240, record=True)
+    console.print(comparison_table(comparison))
+    text = console.export_text()
+    assert "tracking error (px)" in text and "final error" not in text
+    assert render_comparison(comparison).size == (1200, 560)
 
 
 def test_progress_rises_to_one():
