@@ -177,7 +177,7 @@ def ccd_iteration_limited(
     tx, ty = (float(v) for v in check_point(target))
     arrival = _check_arrival(arrival_dist)
     start = check_angles(angles, skeleton.count).tolist()
-    status, new, _ = chain.iterate(start, tx, ty, arrival * arrival)
+    status, new = chain.iterate(start, tx, ty, arrival * arrival)
     return status, np.array(new)
 
 
@@ -211,10 +211,15 @@ class _Chain:
             ys.append(ys[-1] + length * math.sin(world_angle))
         return xs, ys
 
+    def error_sqr(self, angles: list[float], tx: float, ty: float) -> float:
+        """Squared distance from the end effector to the target by forward kinematics, px^2."""
+        xs, ys = self.joints(angles)
+        return (xs[-1] - tx) ** 2 + (ys[-1] - ty) ** 2
+
     def iterate(
         self, angles: list[float], tx: float, ty: float, arrival_dist_sqr: float
-    ) -> tuple[SolveStatus, list[float], float]:
-        """One limit-aware pass; returns the status, new angles and the squared end error."""
+    ) -> tuple[SolveStatus, list[float]]:
+        """One limit-aware pass; returns the status and the new angles."""
         joint_x, joint_y = self.joints(angles)
         new = list(angles)
         end_x, end_y = joint_x[-1], joint_y[-1]
@@ -237,13 +242,11 @@ class _Chain:
             end_y = jy + sin_rot * cur_to_end_x + cos_rot * cur_to_end_y
             dx = tx - end_x
             dy = ty - end_y
-            error_sqr = dx * dx + dy * dy
-            if error_sqr <= arrival_dist_sqr:
-                return SolveStatus.SUCCESS, new, error_sqr
+            if dx * dx + dy * dy <= arrival_dist_sqr:
+                return SolveStatus.SUCCESS, new
             if not modified and abs(rot) * cur_to_end_mag > TRIVIAL_ARC_LENGTH:
                 modified = True
-        status = SolveStatus.PROCESSING if modified else SolveStatus.FAILURE
-        return status, new, error_sqr
+        return (SolveStatus.PROCESSING if modified else SolveStatus.FAILURE), new
 
 
 def solve_ccd(
@@ -270,22 +273,22 @@ def solve_ccd(
     tolerance = _check_arrival(tolerance)
     chain = _Chain(skeleton)
     current = skeleton.clamp(check_angles(angles, skeleton.count)).tolist()
-    xs, ys = chain.joints(current)
-    error_sqr = (xs[-1] - tx) ** 2 + (ys[-1] - ty) ** 2
+    error_sqr = chain.error_sqr(current, tx, ty)
     status = SolveStatus.SUCCESS if error_sqr <= tolerance * tolerance else SolveStatus.PROCESSING
     used = 0
     nudged = False
     while used < max_iterations and status is SolveStatus.PROCESSING:
-        status, current, _ = chain.iterate(current, tx, ty, tolerance * tolerance)
+        status, current = chain.iterate(current, tx, ty, tolerance * tolerance)
         used += 1
-        if status is SolveStatus.FAILURE and not nudged and chain.within_reach(tx, ty):
+        # The pass tracks the end by rotations, which drifts from forward kinematics by
+        # rounding: the reported error, and arrival, are the pose's own.
+        error_sqr = chain.error_sqr(current, tx, ty)
+        if status is SolveStatus.SUCCESS and error_sqr > tolerance * tolerance:
+            status = SolveStatus.PROCESSING
+        elif status is SolveStatus.FAILURE and not nudged and chain.within_reach(tx, ty):
             # A straight chain aimed along its own line has no rotation to make: every joint
             # sees the end and the target on one ray. Bend it once and carry on.
             current = skeleton.clamp(np.asarray(current) + _NUDGE).tolist()
+            error_sqr = chain.error_sqr(current, tx, ty)
             status, nudged = SolveStatus.PROCESSING, True
-    if used:
-        # The pass tracks the end by rotations, which drifts from forward kinematics by
-        # rounding; the reported error is the pose's own.
-        xs, ys = chain.joints(current)
-        error_sqr = (xs[-1] - tx) ** 2 + (ys[-1] - ty) ** 2
     return Solution(np.array(current), status, used, math.sqrt(error_sqr))
