@@ -38,10 +38,15 @@ MAX_ASSET_BYTES: Final = 1_000_000
 
 _TAGGED: Final = ("script", "obstacles", "props")
 """Lists of tagged unions: pydantic names the member's tag after the index."""
+_TAGS: Final = frozenset(
+    ("reach", "follow", "wait", "set", "sequence", "segment", "circle", "ball", "box")
+)
+"""The tags themselves, told apart from field names a level-wide check may point at."""
 _FOLLOW_KEYS: Final = {
     shape: frozenset(f.alias or name for name, f in model.model_fields.items())
     for shape, model in FOLLOW_SHAPES.items()
 }
+_TOML_AT = re.compile(r"\(at line (\d+), column (\d+)\)$")
 _HEADER = re.compile(r"^\s*(\[\[?)\s*([A-Za-z0-9_.\-\" ]+?)\s*\]\]?\s*(#.*)?$")
 
 
@@ -86,17 +91,24 @@ def load_level(path: str | Path) -> Level:
     path = Path(path)
     name = str(path)
     try:
-        if path.stat().st_size > MAX_FILE_BYTES:
-            raise LevelError([Problem(name, None, "", f"larger than {MAX_FILE_BYTES} bytes")])
-        text = path.read_text(encoding="utf-8")
+        if path.is_dir():
+            raise LevelError([Problem(name, None, "", "is a folder, not a level file")])
+        if path.exists() and not path.is_file():
+            raise LevelError([Problem(name, None, "", "is not a regular file")])
+        # Read one byte past the limit rather than trust a size the file system reports.
+        with path.open("rb") as handle:
+            data = handle.read(MAX_FILE_BYTES + 1)
     except FileNotFoundError:
         raise LevelError([Problem(name, None, "", "no such level file")]) from None
-    except IsADirectoryError:
-        raise LevelError([Problem(name, None, "", "is a folder, not a level file")]) from None
-    except UnicodeDecodeError as exc:
-        raise LevelError([Problem(name, None, "", f"not UTF-8 text ({exc.reason})")]) from None
     except OSError as exc:
         raise LevelError([Problem(name, None, "", f"cannot be read ({exc.strerror})")]) from None
+    if len(data) > MAX_FILE_BYTES:
+        raise LevelError([Problem(name, None, "", f"larger than {MAX_FILE_BYTES} bytes")])
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        line = data[: exc.start].count(b"\n") + 1
+        raise LevelError([Problem(name, line, "", f"not UTF-8 text ({exc.reason})")]) from None
     level = parse_level(text, name)
     if level.level.theme is not None:
         try:
@@ -164,8 +176,12 @@ def parse_level(text: str, file: str = "<level>") -> Level:
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
-        line = getattr(exc, "lineno", None)
-        message = getattr(exc, "msg", str(exc))
+        # Python < 3.14 puts the position only in the message: "... (at line 2, column 21)".
+        message = str(exc)
+        at = _TOML_AT.search(message)
+        line = int(at.group(1)) if at else None
+        if at:
+            message = f"{message[: at.start()]}(column {at.group(2)})"
         raise LevelError([Problem(file, line, "", f"invalid TOML: {message}")]) from None
     except RecursionError:
         raise LevelError([Problem(file, None, "", "invalid TOML: nested too deeply")]) from None
@@ -186,7 +202,7 @@ def parse_level(text: str, file: str = "<level>") -> Level:
 def _without_tags(loc: tuple[object, ...]) -> tuple[object, ...]:
     """Drop the union tags pydantic puts in a path: ``script[0].reach.hold`` is
     ``script[0].hold``, and ``script[0].follow.circle.radius`` is ``script[0].radius``."""
-    if len(loc) > 2 and loc[0] in _TAGGED and isinstance(loc[1], int):
+    if len(loc) > 2 and loc[0] in _TAGGED and isinstance(loc[1], int) and loc[2] in _TAGS:
         rest = loc[3:]
         if loc[2] == "follow" and rest and rest[0] in FOLLOW_SHAPES:
             rest = rest[1:]
@@ -213,8 +229,12 @@ def _message(err: dict) -> str:
         if len(loc) == 5 and loc[2] == "follow" and loc[3] in FOLLOW_SHAPES:
             return _follow_key_message(loc[3], str(loc[4]))
         return "unknown key (check the spelling; see docs/levels.md)"
+    if kind == "missing" and isinstance(err["loc"][-1], int):
+        return "too few values"
     if kind in ("missing", "union_tag_not_found"):
         return "Field required"
+    if kind == "string_pattern_mismatch":
+        return f"must be printable text, without control characters (got {err['input']!r})"
     if kind == "union_tag_invalid":
         return f"must be one of {err['ctx']['expected_tags']} (got {err['ctx']['tag']!r})"
     if kind in ("level_rule", "step_kind"):
@@ -271,6 +291,8 @@ def _locate(
         start = tables[prefix]
         if cut == len(loc) or not isinstance(loc[cut], str):
             return start if prefix else None
+        if (*prefix, loc[cut], 0) in tables:  # an array of tables: its first header
+            return tables[(*prefix, loc[cut], 0)]
         # ``key =``, or a dotted key such as ``set.base =``.
         key = re.compile(rf"^\s*\"?{re.escape(str(loc[cut]))}\"?\s*[=.]")
         lines = text.splitlines()

@@ -386,11 +386,11 @@ class ScriptRunner:
         """Score the tick that just ended at ``time`` (s) with the effector at ``effector`` (px)."""
         if self._run is None:
             return
-        if self._run.observe(time, dt, effector):
+        finished = self._run.observe(time, dt, effector)
+        self._target = self._run.target(time)
+        if finished:
             self.outcomes.append(self._run.outcome(time))
             self._begin(len(self.outcomes), time, self._target)
-        else:
-            self._target = self._run.target(time)
 
     def finish(self, time: float) -> list[StepOutcome]:
         """End the script at ``time`` (s): unfinished steps fail. Returns every outcome."""
