@@ -635,12 +635,16 @@ def _error_panel(canvas: _Canvas, comparison: Comparison, box) -> None:
         canvas.line([(x, bottom), (x, bottom + 4)], _INK)
         canvas.text((x, bottom + 7), f"{i * step:g}", _MUTED, 12, "ma")
     canvas.line([(left, top), (left, bottom), (right, bottom)], _INK)
-    canvas.text((left - 50, top - 22), "end-effector error (px, log scale)", _INK, 13)
+    title = "end-effector error (px, log scale)"
+    if comparison.tolerance is not None:
+        title += ", dashed: reach tolerance"
+    canvas.text((left - 50, top - 22), title, _INK, 13)
     canvas.text(((left + right) / 2, bottom + 25), "simulated time (s)", _INK, 13, "ma")
     if comparison.tolerance is not None:
+        # Marked on the axis, not in the plot, where a label would hide the lines it labels.
         y = px(0.0, comparison.tolerance)[1]
         canvas.dashed((left, y), (right, y), _MUTED)
-        canvas.text((right - 4, y - 3), f"tolerance {comparison.tolerance:g} px", _MUTED, 11, "rb")
+        canvas.text((left - 7, y), f"{comparison.tolerance:g}", _MUTED, 11, "rm")
     # The first solver is drawn last, on top: it is usually the reference.
     for run in reversed(comparison.runs):
         for segment in _finite_segments(run.times, run.errors):
