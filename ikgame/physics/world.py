@@ -223,7 +223,8 @@ class World:
             self.space.step(dt)
             return
         move.elapsed += dt
-        fraction = min(1.0, move.elapsed / move.over)
+        # Ticks add up to the move's time only to within rounding: finish on the last one.
+        fraction = 1.0 if move.elapsed >= move.over - 1e-9 else move.elapsed / move.over
         eased = fraction * fraction * (3.0 - 2.0 * fraction)
         wanted = move.start + (move.end - move.start) * eased
         self.base_body.velocity = tuple((wanted - np.array(self.base_body.position)) / dt)
