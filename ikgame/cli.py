@@ -231,7 +231,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
 
 def _cmd_compare(args: argparse.Namespace) -> int:
     level = load_level(resolve_level(args.level))
-    solvers = [name.strip() for name in args.solvers.split(",") if name.strip()]
+    # Order kept, repeats dropped: "ccd,dls,ccd" compares two solvers.
+    solvers = list(dict.fromkeys(name.strip() for name in args.solvers.split(",") if name.strip()))
     unknown = [name for name in solvers if name not in SOLVER_NAMES]
     if unknown or not solvers:
         raise UsageError(
