@@ -154,7 +154,8 @@ class Simulation:
         self._last = TickInfo(0, 0.0, "processing", 0, math.nan, np.zeros(self.world.count, bool))
         self._result: RunResult | None = None
         self.scene = _scene(level, self.world, self.script)
-        if level.goals:
+        self._has_goals = bool(level.goals)
+        if self._has_goals:
             self.goals.observe(0.0, self.world.prop_states())
 
     @property
@@ -219,7 +220,7 @@ class Simulation:
         effector = self.world.end_effector()
         error = math.nan if target is None else float(np.hypot(*(effector - target)))
         self.script.observe(self.time, self.dt, effector)
-        if self.level.goals:
+        if self._has_goals:
             self.goals.observe(self.time, self.world.prop_states())
         self._last = TickInfo(
             self.tick,
