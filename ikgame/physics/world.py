@@ -203,6 +203,14 @@ class World:
         The kinematic base body is given the velocity that keeps it on a smoothstep profile (at
         rest at both ends, so the chain is not jerked), which pymunk integrates exactly; the last
         step lands it on ``to``. :attr:`skeleton` follows the base while it moves.
+
+        >>> from ikgame.level.model import Level
+        >>> world = World(Level.model_validate({"level": {"name": "x", "duration": 1.0},
+        ...     "chain": {"links": [{"length": 50.0}]}, "script": [{"wait": 1.0}]}))
+        >>> world.move_base((30.0, 0.0), 0.5)
+        >>> for _ in range(60): world.step(1 / 120)
+        >>> world.skeleton.base.tolist()
+        [30.0, 0.0]
         """
         if not (math.isfinite(over) and over > 0):
             raise ValueError(f"over must be a positive number of seconds, got {over!r}")
@@ -210,7 +218,15 @@ class World:
         self._base_move = _BaseMove(start, np.asarray(to, dtype=float), float(over))
 
     def prop_states(self) -> np.ndarray:
-        """(p, 3) each prop's ``(x, y, angle)``: centre in px, angle in radians."""
+        """(p, 3) each prop's ``(x, y, angle)``: centre in px, angle in radians.
+
+        >>> from ikgame.level.model import Level
+        >>> World(Level.model_validate({"level": {"name": "x", "duration": 1.0},
+        ...     "chain": {"links": [{"length": 50.0}]}, "script": [{"wait": 1.0}],
+        ...     "props": [{"kind": "ball", "name": "b", "position": [80, 0], "radius": 5}]}
+        ...     )).prop_states().tolist()
+        [[80.0, 0.0, 0.0]]
+        """
         return np.array([(*b.position, b.angle) for b in self.prop_bodies], dtype=float).reshape(
             -1, 3
         )
