@@ -13,6 +13,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from rich.console import Console
+from rich.markup import escape
 from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
 from rich.table import Table
 
@@ -20,8 +21,8 @@ import ikgame
 from ikgame._files import write_atomic, write_json
 from ikgame.compare import compare_level, comparison_table, write_comparison
 from ikgame.level.library import DEFAULT_LEVEL, resolve_level
-from ikgame.level.loader import LevelError, load_level
-from ikgame.level.model import SOLVER_NAMES
+from ikgame.level.loader import LevelError, Problem, level_theme, load_level
+from ikgame.level.model import SOLVER_NAMES, Level
 from ikgame.level.tools import level_rows, schema_text, validate_files
 from ikgame.render.export import check_out_dir, export_run, parse_size
 from ikgame.render.theme import available_themes, load_theme
@@ -68,10 +69,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         return args.handler(args)
     except LevelError as exc:
         for problem in exc.problems:
-            err.print(f"[bold red]error:[/] {problem}", soft_wrap=True)
+            err.print(f"[bold red]error:[/] {escape(str(problem))}", soft_wrap=True)
         return EXIT_BAD_INPUT
     except UsageError as exc:
-        err.print(f"[bold red]error:[/] {exc}", soft_wrap=True)
+        err.print(f"[bold red]error:[/] {escape(str(exc))}", soft_wrap=True)
         return EXIT_BAD_INPUT
     except KeyboardInterrupt:
         err.print("interrupted")
@@ -79,7 +80,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except Exception as exc:  # the last line of defence: report, never a bare traceback
         if getattr(args, "debug", False):
             raise
-        err.print(f"[bold red]internal error:[/] {type(exc).__name__}: {exc}", soft_wrap=True)
+        err.print(
+            f"[bold red]internal error:[/] {type(exc).__name__}: {escape(str(exc))}", soft_wrap=True
+        )
         err.print("rerun with --debug for the traceback, and please report it.")
         return EXIT_INTERNAL
 
@@ -123,9 +126,9 @@ def _parser() -> argparse.ArgumentParser:
     )
     run.add_argument(
         "--theme",
-        default="light",
         metavar="NAME",
-        help=f"colour theme: {', '.join(available_themes())}, or a theme JSON file (default: light)",
+        help=f"colour theme: {', '.join(available_themes())}, or a theme JSON file "
+        "(default: the level's own theme, else light)",
     )
     run.add_argument(
         "--workers", type=int, metavar="N", help="processes drawing frames (default: automatic)"
@@ -202,8 +205,11 @@ def _cmd_run(args: argparse.Namespace) -> int:
         check_out_dir(out, args.force)
     with _usage("--size"):
         size = parse_size(args.size)
-    with _usage("--theme"):
-        theme = load_theme(args.theme)
+    if args.theme is not None:
+        with _usage("--theme"):
+            theme = load_theme(args.theme)
+    else:
+        theme = load_theme(_level_theme(level, level_path) or "light")
     if args.workers is not None and args.workers < 1:
         raise UsageError(f"--workers: must be at least 1, got {args.workers}")
     console = Console(quiet=args.quiet, highlight=False)
@@ -247,7 +253,7 @@ def _cmd_compare(args: argparse.Namespace) -> int:
         comparison = compare_level(level, solvers, progress=update)
     written = write_comparison(out, comparison)
     console.print(comparison_table(comparison))
-    console.print(f"wrote {out}/: {', '.join(p.name for p in written)}")
+    console.print(f"wrote {escape(str(out))}/: {', '.join(p.name for p in written)}")
     return EXIT_OK
 
 
@@ -267,10 +273,10 @@ def _cmd_list(args: argparse.Namespace) -> int:
     for row in level_rows():
         ends = "" if row["expect"] == "passed" else f", meant to end {row['expect']}"
         console.print(
-            f"[bold]{Path(str(row['file'])).stem}[/]  {row['name']}  [dim]({row['links']} links, "
-            f"{row['steps']} steps, {row['solver']}{ends})[/]"
+            f"[bold]{Path(str(row['file'])).stem}[/]  {escape(str(row['name']))}  "
+            f"[dim]({row['links']} links, {row['steps']} steps, {row['solver']}{ends})[/]"
         )
-        console.print(f"    {row['description']}", soft_wrap=False)
+        console.print(f"    {escape(str(row['description']))}")
     console.print("\nrun one with: ikgame run NAME   (for example: ikgame run 02_tentacle)")
     return EXIT_OK
 
@@ -282,6 +288,14 @@ def _cmd_schema(args: argparse.Namespace) -> int:
     else:
         write_atomic(args.out, text.encode("utf-8"))
     return EXIT_OK
+
+
+def _level_theme(level: Level, level_path: Path) -> str | Path | None:
+    """The level's own theme, with a bad one reported like any other level problem."""
+    try:
+        return level_theme(level, level_path)
+    except ValueError as exc:
+        raise LevelError([Problem(str(level_path), None, "level.theme", str(exc))]) from None
 
 
 class _usage:
@@ -333,23 +347,38 @@ class _progress:
 
 def _print_summary(console: Console, result: RunResult, out: Path, written: list[Path]) -> None:
     colour = {"passed": "green", "failed": "yellow", "diverged": "red"}[result.status]
+    expected = (
+        "" if result.status == result.expect else f" [dim](designed to end {result.expect})[/]"
+    )
     console.print(
-        f"[bold]{result.level}[/] ({result.solver}): [bold {colour}]{result.status}[/] "
-        f"after {result.sim_time:.2f} s simulated ({result.ticks} ticks)"
+        f"[bold]{escape(result.level)}[/] ({result.solver}): [bold {colour}]{result.status}[/]"
+        f"{expected}, score {result.score:.0f}/100, after {result.sim_time:.2f} s simulated "
+        f"({result.ticks} ticks)"
     )
     table = Table(show_edge=False, pad_edge=False)
-    for column in ("step", "kind", "result", "time to reach (s)", "final error (px)"):
+    columns = ("step", "kind", "result", "time to reach (s)", "error: final / mean (px)")
+    for column in columns:
         table.add_column(column, justify="right" if "(" in column else "left")
     for step in result.steps:
+        errors = [e for e in (step.final_error, step.mean_error) if e is not None]
         table.add_row(
             str(step.index + 1),
             step.kind,
-            "[green]passed[/]" if step.passed else f"[yellow]failed[/] {step.note}",
+            "[green]passed[/]" if step.passed else f"[yellow]failed[/] {escape(step.note)}",
             "-" if step.time_to_reach is None else f"{step.time_to_reach:.2f}",
-            "-" if step.final_error is None else f"{step.final_error:.1f}",
+            " / ".join(f"{e:.1f}" for e in errors) or "-",
+        )
+    for goal in result.goals:
+        x, y = goal.final_position
+        table.add_row(
+            f"goal {goal.index + 1}",
+            escape(goal.name),
+            "[green]passed[/]" if goal.passed else "[yellow]failed[/]",
+            "-",
+            f"{escape(goal.prop)} ended at ({x:.0f}, {y:.0f})",
         )
     console.print(table)
     frames = sum(1 for p in written if p.parent.name == "frames")
     others = [p.name for p in written if p.parent.name != "frames"]
     listed = ([f"frames/ ({frames} PNG)"] if frames else []) + others
-    console.print(f"wrote {out}/: {', '.join(listed)}")
+    console.print(f"wrote {escape(str(out))}/: {', '.join(listed)}")

@@ -26,6 +26,7 @@ from typing import Final
 
 import numpy as np
 from PIL import Image, ImageDraw, ImageFont
+from rich.markup import escape
 from rich.table import Table
 
 from ikgame._files import write_atomic, write_json
@@ -438,7 +439,7 @@ def comparison_table(comparison: Comparison) -> Table:
     steps = comparison.runs[0].steps
     reach_steps = [s.index for s in steps if s.kind == "reach"]
     tracking = any(run.tracking_error is not None for run in comparison.runs)
-    table = Table(title=f"{comparison.level}: solver comparison", show_edge=False)
+    table = Table(title=f"{escape(comparison.level)}: solver comparison", show_edge=False)
     table.add_column("solver")
     table.add_column("status")
     table.add_column("score", justify="right")

@@ -162,3 +162,28 @@ def test_compare_writes_json_and_png_and_rejects_unknown_solvers(tmp_path, capsy
     assert main(["compare", "--solvers", "ccd,magic", "--out", str(tmp_path / "x")]) == 2
     assert "unknown solver 'magic'" in capsys.readouterr().err
     assert not (tmp_path / "x").exists()
+
+
+def test_level_text_is_printed_as_text_not_console_markup(tmp_path, capsys):
+    level = tmp_path / "odd.toml"
+    level.write_text(
+        '[level]\nname = "[/] [bold]odd"\nduration = 1.0\n[chain]\n[[chain.links]]\n'
+        "length = 50.0\n[[script]]\nwait = 0.5\n"
+    )
+    assert main(["run", str(level), "--no-frames", "--out", str(tmp_path / "out")]) == 0
+    assert "[/] [bold]odd (ccd): passed" in capsys.readouterr().out
+
+
+def test_run_uses_the_level_theme_unless_told_otherwise(tmp_path):
+    from PIL import Image
+
+    level = tmp_path / "dark.toml"
+    text = (ROOT / "levels" / "01_first_reach.toml").read_text()
+    level.write_text(text.replace("[level]\n", '[level]\ntheme = "dark"\n', 1))
+    corners = {}
+    for name, extra in (("own", []), ("light", ["--theme", "light"])):
+        out = tmp_path / name
+        args = ["run", str(level), "--quiet", "--no-gif", "--size", "64x36", "--out", str(out)]
+        assert main(args + extra) == 0
+        corners[name] = Image.open(out / "frames" / "000000.png").convert("L").getpixel((0, 0))
+    assert corners["own"] < 100 < corners["light"]
