@@ -11,6 +11,7 @@ Angles are radians, lengths and positions pixels, world y points up.
 
 from __future__ import annotations
 
+import copy
 from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import cached_property
@@ -158,6 +159,21 @@ class Skeleton:
         for i, p in enumerate(self.parents):
             depth[i] = self.lengths[i] + (depth[p] if p >= 0 else 0.0)
         return float(depth.max())
+
+    def moved_to(self, base: Sequence[float] | np.ndarray) -> Skeleton:
+        """The same skeleton with its base at ``base`` (px).
+
+        Cheap enough to call every tick while a base moves: only the new point is checked,
+        the already validated arrays are shared.
+
+        >>> Skeleton.chain([1.0]).moved_to((3, 4)).base.tolist()
+        [3.0, 4.0]
+        """
+        point = check_point(base, "base").copy()
+        point.setflags(write=False)
+        moved = copy.copy(self)
+        object.__setattr__(moved, "base", point)
+        return moved
 
     def clamp(self, angles: np.ndarray) -> np.ndarray:
         """Angles clipped to the joint limits, radians.

@@ -17,7 +17,7 @@ Angles are radians, lengths px, times s, world y up.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from typing import Final
 
 import numpy as np
@@ -250,7 +250,7 @@ class World:
             self.base_body.position = tuple(move.end)
             self._base_move = None
         # Solvers need the base where it is now; the Skeleton is frozen, so a new one.
-        self.skeleton = replace(self.skeleton, base=np.array(self.base_body.position))
+        self.skeleton = self.skeleton.moved_to(self.base_body.position)
 
     def diverged(self) -> bool:
         """True when any body's pose is NaN, infinite, or absurdly far away.

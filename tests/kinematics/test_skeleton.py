@@ -270,3 +270,19 @@ def test_reach_ignores_the_pose_and_bounds_every_point():
         assert np.all(np.hypot(*(points - skeleton.base).T) <= skeleton.reach + 1e-9)
     straight, _ = forward_kinematics(skeleton, np.zeros(5))
     assert np.hypot(*(straight[-1] - skeleton.base)) == pytest.approx(skeleton.reach)
+
+
+def test_moved_to_changes_only_the_base():
+    skeleton = Skeleton.chain([3.0, 4.0], base=(1, 2), base_angle=0.5, limits=[None, (-1.0, 1.0)])
+    moved = skeleton.moved_to((10.0, -5.0))
+    assert moved.base.tolist() == [10.0, -5.0]
+    assert skeleton.base.tolist() == [1.0, 2.0]
+    for name in ("lengths", "parents", "lower", "upper"):
+        assert np.array_equal(getattr(moved, name), getattr(skeleton, name))
+    assert moved.base_angle == 0.5 and moved.is_chain
+    points, _ = forward_kinematics(moved, np.zeros(2))
+    assert points[0].tolist() == [10.0, -5.0]
+    with pytest.raises(ValueError, match="base must be finite"):
+        skeleton.moved_to((np.nan, 0.0))
+    with pytest.raises(ValueError, match="read-only"):
+        moved.base[0] = 0.0
