@@ -259,7 +259,10 @@ def _worker_payloads(
     start: int, stop: int, palette: bytes | None
 ) -> list[tuple[bytes | None, ...]]:
     assert _WORKER_JOB is not None, "worker used without _init_worker"
-    return [_WORKER_JOB.payload(i, palette) for i in range(start, stop)]
+    payloads = [_WORKER_JOB.payload(i, palette) for i in range(start, stop)]
+    # Palette indices are a byte per pixel but mostly runs: compressed they are ~5% of the
+    # size, both in the pipe to the main process and in results queued for their turn.
+    return [(png, None if idx is None else zlib.compress(idx, 1)) for png, idx in payloads]
 
 
 def _worker_rgb(index: int) -> bytes:
@@ -267,13 +270,28 @@ def _worker_rgb(index: int) -> bytes:
     return _WORKER_JOB.render(index).tobytes()
 
 
+def _main_importable() -> bool:
+    """Whether spawned workers can import ``__main__`` again, as multiprocessing requires: yes
+    for a module, a script file or an interactive session; no for code piped to ``python -``."""
+    main = sys.modules.get("__main__")
+    if main is None or getattr(main, "__spec__", None) is not None:
+        return True
+    path = getattr(main, "__file__", None)
+    return path is None or os.path.isfile(path)
+
+
 def _worker_count(workers: int | None, frames: int) -> int:
     if workers is None:
-        if frames < PARALLEL_MIN_FRAMES:
+        if frames < PARALLEL_MIN_FRAMES or not _main_importable():
             return 1
         return max(1, min(os.cpu_count() or 1, MAX_AUTO_WORKERS))
     if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
         raise ValueError(f"workers must be a positive int or None, got {workers!r}")
+    if workers > 1 and not _main_importable():
+        raise ValueError(
+            "worker processes must import the main module, and code read from stdin has none: "
+            "run a script file (with an `if __name__ == '__main__':` guard) or pass workers=1"
+        )
     return workers
 
 
@@ -319,7 +337,8 @@ def _payloads(
     while pending:
         results = pending.popleft().result()
         submit()
-        yield from results
+        for png, packed in results:
+            yield png, None if packed is None else zlib.decompress(packed)
 
 
 def _sample_images(
@@ -645,7 +664,8 @@ def export_run(
     frame, as browsers slow faster GIFs down); ``run.png`` an APNG at the exact frame rate;
     ``sheet.png`` a contact sheet of about 12 frames; ``motion.json`` (see :func:`motion_json`).
     ``workers`` processes draw the frames (None: one per CPU for long runs, else 1); the files
-    are the same byte for byte whatever the count. Frame files left from an earlier, longer run
+    are the same byte for byte whatever the count. Workers are spawned, so, as always with
+    multiprocessing, a calling script needs an ``if __name__ == "__main__":`` guard. Frame files left from an earlier, longer run
     are removed so ``frames/`` holds this run only. Check ``out_dir`` first with
     :func:`check_out_dir`.
 

@@ -250,3 +250,11 @@ def test_trail_covers_the_last_seconds(run):
     assert len(trail) == math.ceil(export.TRAIL_SECONDS * scene.fps) + 1
     np.testing.assert_array_equal(trail[-1], snaps[80].joints[-1])
     assert len(export.trail_at(snaps, 0, scene.fps)) == 1
+
+
+def test_code_from_stdin_exports_serially_or_says_why(tmp_path, run, monkeypatch):
+    scene, snaps = run(export.PARALLEL_MIN_FRAMES)
+    monkeypatch.setattr(export, "_main_importable", lambda: False)
+    assert export._worker_count(None, len(snaps)) == 1
+    with pytest.raises(ValueError, match="workers=1"):
+        _export(tmp_path, scene, snaps, workers=2)
