@@ -387,10 +387,6 @@ def _build_palette(samples: Sequence[Image.Image], theme: Theme) -> bytes:
     return bytes(c for rgb in colors[:GIF_COLORS] for c in rgb)
 
 
-# Bit offsets of R, G, B in an RGBX pixel read as a native uint32.
-_RGBX_SHIFTS = (0, 8, 16) if sys.byteorder == "little" else (24, 16, 8)
-
-
 class _Quantizer:
     """Maps RGB frames to palette indices: a colour in the palette to itself, any other to the
     nearest entry, with no dithering.
@@ -407,9 +403,10 @@ class _Quantizer:
         self.table = np.full(1 << 24, self._UNKNOWN, dtype=np.uint16)  # 32 MB
 
     def indices(self, image: Image.Image) -> bytes:
-        # RGBX is Pillow's own layout: one uint32 per pixel, the X byte masked off.
-        packed = np.frombuffer(image.convert("RGB").tobytes("raw", "RGBX"), dtype=np.uint32)
-        packed = packed & 0xFFFFFF
+        # RGBX is Pillow's own layout: one little-endian uint32 per pixel, R in the low byte,
+        # X masked off.
+        rgbx = image.convert("RGB").tobytes("raw", "RGBX")
+        packed = np.frombuffer(rgbx, dtype="<u4") & 0xFFFFFF
         found = self.table[packed]
         missing = found == self._UNKNOWN
         if missing.any():
@@ -424,7 +421,7 @@ class _Quantizer:
         out = np.empty(len(packed), dtype=np.uint16)
         for start in range(0, len(packed), 4096):
             block = packed[start : start + 4096].astype(np.int64)
-            rgb = np.stack([block >> shift & 255 for shift in _RGBX_SHIFTS], axis=1)
+            rgb = np.stack([block & 255, block >> 8 & 255, block >> 16], axis=1)
             diff = rgb[:, None, :] - self.colors[None, :, :]
             out[start : start + 4096] = np.argmin((diff * diff * weights).sum(axis=2), axis=1)
         return out

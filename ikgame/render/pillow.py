@@ -92,8 +92,9 @@ def render_snapshot(
     extent = _Extent()
     _draw_dynamic(_Painter(extent, big, theme, supersample), scene, snapshot, trail)
     image = static.copy()
-    if extent.box is not None:
-        paste, crop = _dirty_boxes(extent.box, camera.size, supersample)
+    boxes = None if extent.box is None else _dirty_boxes(extent.box, camera.size, supersample)
+    if boxes is not None:
+        paste, crop = boxes
         region = static_big.crop(tuple(v * supersample for v in crop))
         offset = (crop[0] * supersample, crop[1] * supersample)
         painter = _Painter(ImageDraw.Draw(region), big, theme, supersample, offset)
@@ -139,10 +140,11 @@ def _static_layers(
 
 def _dirty_boxes(
     box: tuple[float, float, float, float], size: tuple[int, int], supersample: int
-) -> tuple[tuple[int, int, int, int], tuple[int, int, int, int]]:
+) -> tuple[tuple[int, int, int, int], tuple[int, int, int, int]] | None:
     """Output-pixel boxes for a frame whose moving parts cover drawing-pixel ``box``: the one to
     paste (every pixel the moving parts can change) and the larger one to redraw and shrink, with
-    room for the filter's reach, so no pasted pixel misses a neighbour a full-frame shrink uses."""
+    room for the filter's reach, so no pasted pixel misses a neighbour a full-frame shrink uses.
+    None when the moving parts are all out of the picture."""
     reach = LANCZOS_REACH if supersample > 1 else 0
     width, height = size
 
@@ -157,6 +159,8 @@ def _dirty_boxes(
         math.ceil(y1 / supersample),
     )
     paste = grow(touched, reach)
+    if paste[0] >= paste[2] or paste[1] >= paste[3]:
+        return None
     return paste, grow(paste, reach)
 
 

@@ -258,3 +258,10 @@ def test_code_from_stdin_exports_serially_or_says_why(tmp_path, run, monkeypatch
     assert export._worker_count(None, len(snaps)) == 1
     with pytest.raises(ValueError, match="workers=1"):
         _export(tmp_path, scene, snaps, workers=2)
+
+
+def test_quantizer_keeps_palette_colours_exact_and_maps_others_to_the_nearest():
+    palette = bytes([10, 20, 30, 200, 200, 200, 11, 20, 30] + [0, 0, 0] * 252)
+    image = Image.new("RGB", (3, 1))
+    image.putdata([(10, 20, 30), (11, 20, 30), (190, 205, 199)])
+    assert list(export._Quantizer(palette).indices(image)) == [0, 2, 1]

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pymunk
 import pytest
@@ -126,6 +128,18 @@ def test_redrawing_only_the_moving_parts_matches_a_full_frame(run):
     diff = np.abs(np.asarray(fast, dtype=int) - np.asarray(full, dtype=int)).max(axis=2)
     assert np.count_nonzero(diff) < 0.005 * diff.size
     assert diff.mean() < 0.2
+
+
+def test_a_chain_out_of_the_picture_leaves_the_static_scene(run):
+    scene, snaps = run(2)
+    camera = Camera.fit(scene, snaps, SIZE)
+    away = dataclasses.replace(
+        snaps[0], joints=snaps[0].joints + 1e5, target=None, props=np.zeros((0, 3))
+    )
+    away_scene = dataclasses.replace(scene, props=(), targets=np.zeros((0, 2)))
+    image = render_snapshot(away_scene, away, camera, LIGHT, hud=False)
+    static = pillow._static_layers(away_scene, camera, LIGHT, 3)[1]
+    assert image.tobytes() == static.tobytes()
 
 
 def test_hud_changes_only_the_top_left_corner(run):
