@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 from hypothesis import given
@@ -93,7 +95,7 @@ def test_fit_contains_all_geometry_inside_the_margin(size):
 
 def test_fit_uses_every_snapshot_base_of_a_moving_base(run):
     scene, snaps = run(4)
-    moved = [s.__class__(**{**s.__dict__, "joints": s.joints + [300.0, 0.0]}) for s in snaps[2:]]
+    moved = [dataclasses.replace(s, joints=s.joints + [300.0, 0.0]) for s in snaps[2:]]
     cam = Camera.fit(scene, snaps[:2] + moved, size=(320, 180))
     right_edge = cam.world_to_pixel([[300.0 + scene.reach, 0.0]])[0, 0]
     assert right_edge <= 320
