@@ -19,7 +19,6 @@ import os
 import re
 import struct
 import sys
-import uuid
 import zlib
 from collections import deque
 from collections.abc import Callable, Iterator, Sequence
@@ -36,6 +35,7 @@ from PIL import GifImagePlugin, Image, ImageDraw, ImageFont
 from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 
+from ikgame._files import atomic_open, write_atomic
 from ikgame.render.camera import Camera
 from ikgame.render.pillow import render_snapshot
 from ikgame.render.theme import Theme, load_theme
@@ -606,28 +606,6 @@ def _contact_sheet(job: _Job, indices: Sequence[int]) -> Image.Image:
 
 
 @contextmanager
-def _atomic_open(path: Path) -> Iterator[IO[bytes]]:
-    """A file object whose contents appear at ``path`` only once the block ends without error."""
-    temp = path.with_name(f".{path.name}.{uuid.uuid4().hex[:12]}.tmp")
-    # os.open with 0o666 lets the umask decide the mode, as for any other new file (mkstemp
-    # would leave every export readable by its owner only).
-    fd = os.open(temp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_BINARY", 0), 0o666)
-    try:
-        with os.fdopen(fd, "wb") as fp:
-            yield fp
-        os.replace(temp, path)
-    except BaseException:
-        temp.unlink(missing_ok=True)
-        raise
-
-
-def _atomic_write(path: Path, data: bytes) -> Path:
-    with _atomic_open(path) as fp:
-        fp.write(data)
-    return path
-
-
-@contextmanager
 def _progress(enabled: bool, total: int) -> Iterator[Callable[[], None]]:
     """A rich progress bar on stderr, or a no-op; yields the function that advances it."""
     if not enabled:
@@ -697,10 +675,10 @@ def export_run(
         # The colour table is 32 MB: keep it no longer than the export that needed it.
         _quantizer.cache_clear()
     if sheet:
-        written.append(_atomic_write(out / "sheet.png", _png_bytes(_contact_sheet(job, samples))))
+        written.append(write_atomic(out / "sheet.png", _png_bytes(_contact_sheet(job, samples))))
     if motion:
         data = _motion_bytes(motion_json(scene, snapshots))
-        written.append(_atomic_write(out / "motion.json", data))
+        written.append(write_atomic(out / "motion.json", data))
     return written
 
 
@@ -732,20 +710,18 @@ def _write_frames(
         if gif:
             palette = _build_palette(_sample_images(job, pool, samples), job.theme)
             animations.append(out / "run.gif")
-            gif_writer = _GifWriter(
-                files.enter_context(_atomic_open(animations[-1])), size, palette
-            )
+            gif_writer = _GifWriter(files.enter_context(atomic_open(animations[-1])), size, palette)
             durations = _gif_durations(
                 math.ceil(count / job.gif_stride), job.scene.fps, job.gif_stride
             )
         if apng:
             animations.append(out / "run.png")
-            apng_file = files.enter_context(_atomic_open(animations[-1]))
+            apng_file = files.enter_context(atomic_open(animations[-1]))
             apng_writer = _ApngWriter(apng_file, count, size, job.scene.fps)
         for index, (png, indices) in enumerate(_payloads(job, pool, workers, palette)):
             if frames:
                 assert png is not None
-                frame_paths.append(_atomic_write(frames_dir / f"{index:06d}.png", png))
+                frame_paths.append(write_atomic(frames_dir / f"{index:06d}.png", png))
             if gif_writer is not None and indices is not None:
                 gif_writer.add(indices, durations[index // job.gif_stride])
             if apng_writer is not None:
