@@ -118,9 +118,10 @@ class Camera:
         """A camera that shows everything a run can touch, centred, at one scale on both axes.
 
         Without ``scene.bounds`` the view holds the obstacles, the goals, the script's targets
-        and the circle of the chain's full reach around its base (every snapshot's base, for a
-        base that moves), plus ``margin`` (a fraction of the shorter image side) all around.
-        With ``scene.bounds`` the view fits those bounds exactly.
+        and the chain: given a run's snapshots, every place its joints and props went; given
+        only a base point, the square around the chain's full reach. ``margin`` (a fraction of
+        the shorter image side) is added all around. With ``scene.bounds`` the view fits those
+        bounds exactly.
 
         >>> scene = Scene("demo", np.zeros((0, 5)), np.zeros((0, 3)), np.full(2, 8.0), 100.0)
         >>> Camera.fit(scene, (0.0, 0.0), size=(200, 200), margin=0.0)
@@ -137,7 +138,7 @@ class Camera:
                 )
             pad = 0.0
         else:
-            xmin, ymin, xmax, ymax = _scene_box(scene, _bases(snapshots_or_base))
+            xmin, ymin, xmax, ymax = _scene_box(scene, _chain_box(scene, snapshots_or_base))
             pad = margin * min(width, height)
         extent_x = max(xmax - xmin, MIN_EXTENT)
         extent_y = max(ymax - ymin, MIN_EXTENT)
@@ -152,26 +153,33 @@ def _as_points(points: object) -> np.ndarray:
     return pts
 
 
-def _bases(snapshots_or_base: Sequence[Snapshot] | object) -> np.ndarray:
-    """Every base position the run shows, (k, 2)."""
+def _chain_box(scene: Scene, snapshots_or_base: Sequence[Snapshot] | object) -> np.ndarray:
+    """(2, 2) low and high corner of where the chain must be seen: everywhere a recorded run's
+    links and props went, or the square of the chain's full reach around a lone base."""
     if (
         isinstance(snapshots_or_base, Sequence)
         and snapshots_or_base
         and isinstance(snapshots_or_base[0], Snapshot)
     ):
-        return np.array([snap.joints[0] for snap in snapshots_or_base], dtype=float)
+        # Where the chain went, not the circle it could sweep: a chain on a floor never
+        # reaches below it, and the full circle would leave half of every frame empty.
+        parts = [snap.joints for snap in snapshots_or_base]
+        parts += [snap.props[:, :2] for snap in snapshots_or_base if len(snap.props)]
+        points = np.concatenate(parts).astype(float)
+        pad = float(np.max(scene.link_widths, initial=0.0)) / 2.0
+        return np.array([points.min(axis=0) - pad, points.max(axis=0) + pad])
     base = np.asarray(snapshots_or_base, dtype=float)
     if base.shape != (2,):
         raise ValueError(
             f"expected a list of snapshots or a base point (x, y), got shape {base.shape}"
         )
-    return base[None, :]
+    return np.array([base - scene.reach, base + scene.reach])
 
 
-def _scene_box(scene: Scene, bases: np.ndarray) -> tuple[float, float, float, float]:
-    """The bounding box of the static geometry, targets, goals and reach circles."""
-    lows = [bases.min(axis=0) - scene.reach]
-    highs = [bases.max(axis=0) + scene.reach]
+def _scene_box(scene: Scene, chain: np.ndarray) -> tuple[float, float, float, float]:
+    """The bounding box of the static geometry, targets, goals and the chain's box."""
+    lows = [chain[0]]
+    highs = [chain[1]]
     segments = np.asarray(scene.segments, dtype=float).reshape(-1, 5)
     if len(segments):
         ends = np.concatenate([segments[:, 0:2], segments[:, 2:4]])
