@@ -280,15 +280,17 @@ def solve_ccd(
     while used < max_iterations and status is SolveStatus.PROCESSING:
         status, current = chain.iterate(current, tx, ty, tolerance * tolerance)
         used += 1
-        # The pass tracks the end by rotations, which drifts from forward kinematics by
-        # rounding: the reported error, and arrival, are the pose's own.
-        error_sqr = chain.error_sqr(current, tx, ty)
-        if status is SolveStatus.SUCCESS and error_sqr > tolerance * tolerance:
-            status = SolveStatus.PROCESSING
+        if status is SolveStatus.SUCCESS:
+            # The pass tracks the end by rotations, which drifts from forward kinematics by
+            # rounding: arrival, like the reported error, is the pose's own.
+            error_sqr = chain.error_sqr(current, tx, ty)
+            if error_sqr > tolerance * tolerance:
+                status = SolveStatus.PROCESSING
         elif status is SolveStatus.FAILURE and not nudged and chain.within_reach(tx, ty):
             # A straight chain aimed along its own line has no rotation to make: every joint
             # sees the end and the target on one ray. Bend it once and carry on.
             current = skeleton.clamp(np.asarray(current) + _NUDGE).tolist()
-            error_sqr = chain.error_sqr(current, tx, ty)
             status, nudged = SolveStatus.PROCESSING, True
+    if used and status is not SolveStatus.SUCCESS:
+        error_sqr = chain.error_sqr(current, tx, ty)
     return Solution(np.array(current), status, used, math.sqrt(error_sqr))
