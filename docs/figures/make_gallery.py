@@ -1,0 +1,39 @@
+"""Make the README's pictures from shipped levels: ``python docs/figures/make_gallery.py``.
+
+Runs each level through the same path as ``ikgame run`` and keeps the animation of one and the
+contact sheets of a few, small enough to commit.
+"""
+
+from __future__ import annotations
+
+import shutil
+import tempfile
+from pathlib import Path
+
+from ikgame.level.library import LEVELS_DIR
+from ikgame.level.loader import load_level
+from ikgame.render.export import export_run
+from ikgame.sim import Simulation
+
+HERE = Path(__file__).resolve().parent
+ANIMATED = "12_push_the_ball"
+SHEETS = ("02_tentacle", "07_figure_eight", "10_moving_base", "13_conductor")
+SIZE = (400, 225)  # px: small enough for a README, large enough to read
+
+
+def _export(name: str, **options: bool) -> Path:
+    sim = Simulation(load_level(LEVELS_DIR / f"{name}.toml"))
+    sim.run()
+    out = Path(tempfile.mkdtemp()) / name
+    export_run(out, sim.scene, sim.snapshots, size=SIZE, frames=False, motion=False, **options)
+    return out
+
+
+def main() -> None:
+    shutil.copyfile(_export(ANIMATED, gif=True) / "run.gif", HERE / f"{ANIMATED}.gif")
+    for name in SHEETS:
+        shutil.copyfile(_export(name, gif=False, sheet=True) / "sheet.png", HERE / f"{name}.png")
+
+
+if __name__ == "__main__":
+    main()
