@@ -2,7 +2,6 @@
 
 import json
 import math
-import re
 from pathlib import Path
 
 import numpy as np
@@ -116,10 +115,3 @@ def test_a_blown_up_world_is_reported_as_diverged(make_level):
     sim.world.bodies[1].velocity = (1e12, 0.0)
     result = sim.run()
     assert result.status == "diverged"
-
-
-def test_readme_game_loop_example_runs():
-    readme = (ROOT / "README.md").read_text()
-    section = readme.split("## Use it from your game loop", 1)[1]
-    code = re.search(r"```python\n(.*?)```", section, re.S).group(1)
-    exec(compile(code, "README.md", "exec"), {})
