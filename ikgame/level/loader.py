@@ -85,7 +85,8 @@ class LevelError(ValueError):
 def load_level(path: str | Path) -> Level:
     """Read and validate a level file; raise :class:`LevelError` naming every problem.
 
-    >>> load_level("levels/01_first_reach.toml").level.name  # doctest: +SKIP
+    >>> from ikgame.level.library import DEFAULT_LEVEL
+    >>> load_level(DEFAULT_LEVEL).level.name
     'First reach'
     """
     path = Path(path)
