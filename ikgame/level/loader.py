@@ -127,7 +127,8 @@ def resolve_level_file(name: str, level_file: str | Path) -> Path:
     ``name`` has passed :func:`~ikgame.level.model.check_relative_file` (no absolute path, no
     ``..``); resolving catches the symlinks.
 
-    >>> resolve_level_file("themes/dark.json", "levels/01_first_reach.toml").name
+    >>> from ikgame.level.library import DEFAULT_LEVEL
+    >>> resolve_level_file("themes/dark.json", DEFAULT_LEVEL).name
     'dark.json'
     """
     roots = (Path(level_file).resolve().parent, ASSETS_DIR.resolve())
@@ -152,7 +153,9 @@ def level_theme(level: Level, level_file: str | Path) -> str | Path | None:
     """The level's theme as the renderer's ``load_theme`` takes it: a shipped theme's name, the
     real path of a theme file (checked by :func:`resolve_level_file`), or None.
 
-    >>> level_theme(load_level("levels/01_first_reach.toml"), "levels/01_first_reach.toml")
+    >>> from ikgame.level.library import DEFAULT_LEVEL
+    >>> level_theme(load_level(DEFAULT_LEVEL), DEFAULT_LEVEL) is None
+    True
     """
     theme = level.level.theme
     if theme is None or theme.endswith(".json"):

@@ -57,7 +57,8 @@ def validate_files(paths: Iterable[str | Path]) -> list[Problem]:
     """Every problem in every level file (a folder stands for its ``*.toml`` files); empty when
     all are valid.
 
-    >>> validate_files(["levels/01_first_reach.toml"])
+    >>> from ikgame.level.library import LEVELS_DIR
+    >>> validate_files([LEVELS_DIR])
     []
     >>> [str(p) for p in validate_files(["no/such.toml"])]
     ['no/such.toml: no such level file']
