@@ -14,6 +14,7 @@ from typing import Final
 
 import numpy as np
 
+from ikgame.kinematics._floats import FloatChain
 from ikgame.kinematics.skeleton import Skeleton, check_angles, check_point
 from ikgame.kinematics.solver import Solution, SolveStatus
 
@@ -181,40 +182,8 @@ def ccd_iteration_limited(
     return status, np.array(new)
 
 
-class _Chain:
-    """A chain's arrays as Python floats: CCD walks joint by joint, where numpy's per-call
-    overhead would cost more than the arithmetic."""
-
-    def __init__(self, skeleton: Skeleton) -> None:
-        if not skeleton.is_chain:
-            raise ValueError("CCD needs a serial chain (parents[i] == i - 1)")
-        self.lengths = skeleton.lengths.tolist()
-        self.lower = skeleton.lower.tolist()
-        self.upper = skeleton.upper.tolist()
-        self.free = (~skeleton.limited).tolist()
-        self.base_x = float(skeleton.base[0])
-        self.base_y = float(skeleton.base[1])
-        self.base_angle = skeleton.base_angle
-
-    def within_reach(self, tx: float, ty: float) -> bool:
-        """True when the target is strictly closer to the base than the chain's full length."""
-        return math.hypot(tx - self.base_x, ty - self.base_y) < sum(self.lengths)
-
-    def joints(self, angles: list[float]) -> tuple[list[float], list[float]]:
-        """World x and y of every joint, then the end effector."""
-        xs = [self.base_x]
-        ys = [self.base_y]
-        world_angle = self.base_angle
-        for length, angle in zip(self.lengths, angles, strict=True):
-            world_angle += angle
-            xs.append(xs[-1] + length * math.cos(world_angle))
-            ys.append(ys[-1] + length * math.sin(world_angle))
-        return xs, ys
-
-    def error_sqr(self, angles: list[float], tx: float, ty: float) -> float:
-        """Squared distance from the end effector to the target by forward kinematics, px^2."""
-        xs, ys = self.joints(angles)
-        return (xs[-1] - tx) ** 2 + (ys[-1] - ty) ** 2
+class _Chain(FloatChain):
+    """A chain as floats, with the limit-aware CCD pass."""
 
     def iterate(
         self, angles: list[float], tx: float, ty: float, arrival_dist_sqr: float

@@ -20,10 +20,10 @@ from __future__ import annotations
 
 import math
 from itertools import accumulate
-from typing import NamedTuple
 
 import numpy as np
 
+from ikgame.kinematics._floats import FloatChain
 from ikgame.kinematics.ccd import TRIVIAL_ARC_LENGTH, wrap_angle
 from ikgame.kinematics.jacobian import _check_solve_inputs, _escape_saddle, _solution
 from ikgame.kinematics.skeleton import Skeleton
@@ -57,17 +57,17 @@ def solve_fabrik(
     start, target, tolerance = _check_solve_inputs(
         skeleton, angles, target, max_iterations, tolerance
     )
-    links = _Links.of(skeleton)
+    links = _Links(skeleton)
     tx, ty = float(target[0]), float(target[1])
     current = start.tolist()
-    xs, ys = links.positions(current)
+    xs, ys = links.joints(current)
     error = math.hypot(xs[-1] - tx, ys[-1] - ty)
     if error <= tolerance:
         return _solution(skeleton, start, SolveStatus.SUCCESS, 0, error)
     if math.hypot(tx - links.base_x, ty - links.base_y) >= skeleton.reach:
         stretched = _stretched_toward(links, tx, ty)
         if np.array_equal(skeleton.clamp(stretched), stretched):
-            xs, ys = links.positions(stretched.tolist())
+            xs, ys = links.joints(stretched.tolist())
             error = math.hypot(xs[-1] - tx, ys[-1] - ty)
             status = SolveStatus.SUCCESS if error <= tolerance else SolveStatus.FAILURE
             return _solution(skeleton, stretched, status, 1, error)
@@ -95,40 +95,8 @@ def solve_fabrik(
     return _solution(skeleton, np.array(current), SolveStatus.SUCCESS, used, error)
 
 
-class _Links(NamedTuple):
-    """A chain's arrays as Python floats: FABRIK walks joint by joint, where numpy's per-call
-    overhead would cost more than the arithmetic."""
-
-    lengths: list[float]
-    lower: list[float]
-    upper: list[float]
-    free: list[bool]
-    base_x: float
-    base_y: float
-    base_angle: float
-
-    @classmethod
-    def of(cls, skeleton: Skeleton) -> _Links:
-        return cls(
-            skeleton.lengths.tolist(),
-            skeleton.lower.tolist(),
-            skeleton.upper.tolist(),
-            (~skeleton.limited).tolist(),
-            float(skeleton.base[0]),
-            float(skeleton.base[1]),
-            skeleton.base_angle,
-        )
-
-    def positions(self, angles: list[float]) -> tuple[list[float], list[float]]:
-        """World x and y of every joint, then the end effector, px."""
-        xs = [self.base_x]
-        ys = [self.base_y]
-        heading = self.base_angle
-        for length, angle in zip(self.lengths, angles, strict=True):
-            heading += angle
-            xs.append(xs[-1] + length * math.cos(heading))
-            ys.append(ys[-1] + length * math.sin(heading))
-        return xs, ys
+class _Links(FloatChain):
+    """A chain as floats, with FABRIK's way of fitting an angle into a joint's limits."""
 
     def limited(self, i: int, angle: float, previous: float) -> float:
         """``angle`` as joint ``i``'s angle: wrapped if the joint is free, else clamped into its

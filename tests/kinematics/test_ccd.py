@@ -447,7 +447,7 @@ def test_solve_ccd_rejects_bad_arguments():
         upper=np.full(3, np.inf),
         base=np.zeros(2),
     )
-    with pytest.raises(ValueError, match=r"CCD needs a serial chain"):
+    with pytest.raises(ValueError, match=r"this solver needs a serial chain"):
         solve_ccd(tree, np.zeros(3), np.array([1.0, 1.0]))
 
 

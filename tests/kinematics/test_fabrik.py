@@ -112,7 +112,7 @@ def test_limits_hold_after_every_pass_and_the_error_never_rises(passes):
 
 def test_a_wide_limit_reads_the_angle_nearest_the_previous_one():
     # Limits wider than a turn: 3.3 and 3.3 - 2 pi are the same direction, only one is near.
-    links = _Links.of(Skeleton.chain([1.0], limits=[(-4.0, 4.0)]))
+    links = _Links(Skeleton.chain([1.0], limits=[(-4.0, 4.0)]))
     assert links.limited(0, 3.3 - 2 * PI, previous=3.0) == pytest.approx(3.3)
     assert links.limited(0, 3.3, previous=-3.0) == pytest.approx(3.3 - 2 * PI)
     assert links.limited(0, 3.9, previous=3.5) == pytest.approx(3.9)
@@ -120,7 +120,7 @@ def test_a_wide_limit_reads_the_angle_nearest_the_previous_one():
 
 
 def test_a_free_joint_reads_its_angle_wrapped():
-    links = _Links.of(Skeleton.chain([1.0]))
+    links = _Links(Skeleton.chain([1.0]))
     assert links.limited(0, 3.3, previous=0.0) == pytest.approx(3.3 - 2 * PI)
 
 

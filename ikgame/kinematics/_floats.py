@@ -1,0 +1,46 @@
+"""A serial chain's arrays as Python floats, for the solvers that walk it joint by joint.
+
+CCD and FABRIK visit one joint at a time; there numpy's per-call overhead costs more than the
+arithmetic, so they work on plain lists (px, radians).
+"""
+
+from __future__ import annotations
+
+import math
+
+from ikgame.kinematics.skeleton import Skeleton
+
+
+class FloatChain:
+    """A chain's lengths, limits and base as floats, with forward kinematics on lists."""
+
+    def __init__(self, skeleton: Skeleton) -> None:
+        if not skeleton.is_chain:
+            raise ValueError("this solver needs a serial chain (parents[i] == i - 1)")
+        self.lengths: list[float] = skeleton.lengths.tolist()
+        self.lower: list[float] = skeleton.lower.tolist()
+        self.upper: list[float] = skeleton.upper.tolist()
+        self.free: list[bool] = (~skeleton.limited).tolist()
+        self.base_x = float(skeleton.base[0])
+        self.base_y = float(skeleton.base[1])
+        self.base_angle = skeleton.base_angle
+
+    def joints(self, angles: list[float]) -> tuple[list[float], list[float]]:
+        """World x and y of every joint, then the end effector, px."""
+        xs = [self.base_x]
+        ys = [self.base_y]
+        heading = self.base_angle
+        for length, angle in zip(self.lengths, angles, strict=True):
+            heading += angle
+            xs.append(xs[-1] + length * math.cos(heading))
+            ys.append(ys[-1] + length * math.sin(heading))
+        return xs, ys
+
+    def error_sqr(self, angles: list[float], tx: float, ty: float) -> float:
+        """Squared distance from the end effector to the target by forward kinematics, px^2."""
+        xs, ys = self.joints(angles)
+        return (xs[-1] - tx) ** 2 + (ys[-1] - ty) ** 2
+
+    def within_reach(self, tx: float, ty: float) -> bool:
+        """True when the target is strictly closer to the base than the chain's full length."""
+        return math.hypot(tx - self.base_x, ty - self.base_y) < sum(self.lengths)
