@@ -187,3 +187,28 @@ def test_run_uses_the_level_theme_unless_told_otherwise(tmp_path):
         assert main(args + extra) == 0
         corners[name] = Image.open(out / "frames" / "000000.png").convert("L").getpixel((0, 0))
     assert corners["own"] < 100 < corners["light"]
+
+
+_INVALID = sorted((ROOT / "tests" / "data" / "levels" / "invalid").glob("*.toml"))
+
+
+@pytest.mark.parametrize("level", _INVALID, ids=[p.stem for p in _INVALID])
+def test_every_broken_level_exits_2_names_its_field_and_writes_nothing(tmp_path, capsys, level):
+    out = tmp_path / "out"
+    assert main(["run", str(level), "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    for line in level.with_suffix(".txt").read_text(encoding="utf-8").splitlines():
+        assert f"error: {line.replace(level.name, str(level), 1)}" in err
+    assert "Traceback" not in err
+    assert not out.exists()
+
+
+_SHIPPED = sorted((ROOT / "levels").glob("*.toml"))
+
+
+@pytest.mark.parametrize("level", _SHIPPED, ids=[p.stem for p in _SHIPPED])
+def test_compare_runs_every_solver_on_every_shipped_level(tmp_path, level):
+    out = tmp_path / "cmp"
+    assert main(["compare", str(level), "--quiet", "--out", str(out)]) == 0
+    data = json.loads((out / "compare.json").read_text())
+    assert list(data["solvers"]) == ["ccd", "jacobian_transpose", "dls", "fabrik"]
