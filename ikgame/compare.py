@@ -6,7 +6,9 @@ speed limits, and the controller re-solves from the measured pose every tick. So
 comparison runs the whole level once per solver, in the same world, and measures the motion
 the chain actually makes. :func:`compare_level` does that and returns a :class:`Comparison`;
 :func:`write_comparison` writes ``compare.json`` and ``compare.png``; :func:`comparison_table`
-is the table the ``ikgame compare`` command prints.
+is the table the ``ikgame compare`` command prints. The picture is drawn by
+:func:`ikgame.render.plot.render_comparison` from :meth:`Comparison.plot_data`, plain data, so
+drawing stays out of the simulation's layer.
 
 Everything in a comparison is deterministic for a given level except the wall-clock timing of
 the solver calls, which ``compare.json`` keeps apart under ``wall_clock``.
@@ -19,13 +21,12 @@ from __future__ import annotations
 import io
 import math
 import time
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Final
 
 import numpy as np
-from PIL import Image, ImageDraw, ImageFont
 from rich.markup import escape
 from rich.table import Table
 
@@ -34,16 +35,15 @@ from ikgame.kinematics import SOLVERS, Skeleton, Solution
 from ikgame.level.model import Level
 from ikgame.level.script import StepOutcome
 from ikgame.physics.world import World
+from ikgame.render.plot import ComparisonPlot, SolverTrace, render_comparison
 from ikgame.sim import Simulation
 
 __all__ = [
     "DEFAULT_SOLVERS",
-    "SOLVER_COLOURS",
     "Comparison",
     "SolverRun",
     "compare_level",
     "comparison_table",
-    "render_comparison",
     "squared_jerk",
     "write_comparison",
 ]
@@ -55,24 +55,6 @@ DEFAULT_SOLVERS: Final = tuple(n for n in _SEED_ORDER if n in SOLVERS) + tuple(
 )
 """Every registered solver: the seed's two first (CCD, then Jacobian transpose), then DLS and
 FABRIK, then any solver registered later."""
-
-SOLVER_COLOURS: Final[Mapping[str, tuple[int, int, int]]] = {
-    "ccd": (213, 94, 0),
-    "jacobian_transpose": (0, 114, 178),
-    "dls": (0, 158, 115),
-    "fabrik": (204, 121, 167),
-}
-"""Line colour per solver (Okabe-Ito, readable with colour-blindness), fixed so that one solver
-has the same colour in every figure."""
-
-_EXTRA_COLOURS: Final = ((230, 159, 0), (86, 180, 233), (120, 120, 120), (0, 0, 0))
-"""For solvers registered later than this module was written."""
-
-SUPERSAMPLE: Final = 3
-"""The plot is drawn this many times larger and shrunk: Pillow's lines are not anti-aliased."""
-
-ERROR_FLOOR: Final = 0.01
-"""px: the log error axis starts no lower than this (an error of 0 would be at minus infinity)."""
 
 _WALL_CLOCK_NOTE: Final = (
     "values under 'wall_clock' are wall-clock measurements on the machine that made this file "
@@ -205,6 +187,39 @@ class Comparison:
             "solvers": {run.solver: run.as_dict() for run in self.runs},
         }
 
+    def plot_data(self) -> ComparisonPlot:
+        """What the picture shows of this comparison, as plain data for
+        :func:`ikgame.render.plot.render_comparison`.
+
+        >>> lvl = Level.model_validate({"level": {"name": "x", "duration": 0.1},
+        ...     "chain": {"links": [{"length": 80.0, "repeat": 2}]},
+        ...     "script": [{"reach": [90, 60]}]})
+        >>> plot = compare_level(lvl, ["ccd", "dls"]).plot_data()
+        >>> [(t.solver, len(t.errors)) for t in plot.traces], plot.reach_points.tolist()
+        ([('ccd', 24), ('dls', 24)], [[90.0, 60.0]])
+        """
+        return ComparisonPlot(
+            level=self.level,
+            traces=tuple(
+                SolverTrace(
+                    solver=run.solver,
+                    status=run.status,
+                    sim_time=run.sim_time,
+                    path_length=run.path_length,
+                    times=run.times,
+                    errors=run.errors,
+                    path=run.path,
+                    target_trails=tuple(_moving_targets(run)),
+                )
+                for run in self.runs
+            ),
+            base=self.base,
+            reach=self.reach,
+            start_pose=self.start_pose,
+            reach_points=self.reach_points,
+            tolerance=self.tolerance,
+        )
+
 
 def compare_level(
     level: Level,
@@ -264,6 +279,19 @@ def _reach_points(run: SolverRun) -> np.ndarray:
             if len(targets):
                 points.append(targets[0])
     return np.array(points, dtype=float).reshape(-1, 2)
+
+
+def _moving_targets(run: SolverRun) -> list[np.ndarray]:
+    """The target's path during each step whose target moves (a follow step), px."""
+    trails = []
+    for step in run.steps:
+        if step.kind == "reach":
+            continue
+        targets = run.targets[_step_ticks(run, step)]
+        targets = targets[np.all(np.isfinite(targets), axis=1)]
+        if len(targets) > 1 and np.ptp(targets, axis=0).max() > 0.0:
+            trails.append(targets)
+    return trails
 
 
 def _check_solvers(solvers: Sequence[str]) -> tuple[str, ...]:
@@ -420,7 +448,7 @@ def write_comparison(out_dir: str | Path, comparison: Comparison) -> list[Path]:
     if out.exists() and not out.is_dir():
         raise ValueError(f"{out} exists and is not a folder")
     buffer = io.BytesIO()
-    render_comparison(comparison).save(buffer, format="PNG", optimize=True)
+    render_comparison(comparison.plot_data()).save(buffer, format="PNG", optimize=True)
     return [
         write_json(out / "compare.json", comparison.as_dict()),
         write_atomic(out / "compare.png", buffer.getvalue()),
@@ -481,284 +509,3 @@ def _fmt(value: float | None, spec: str, missing: str = "-") -> str:
     if value is None or not math.isfinite(value):
         return missing
     return format(value, spec)
-
-
-# --- the picture -------------------------------------------------------------------------------
-# Sizes in output pixels; _Canvas multiplies by SUPERSAMPLE.
-
-_INK: Final = (40, 40, 40)
-_MUTED: Final = (110, 110, 110)
-_GRID: Final = (228, 228, 228)
-_FAINT: Final = (200, 200, 200)
-_BACKGROUND: Final = (255, 255, 255)
-_MIN_SIZE: Final = (480, 240)
-_MAX_SIZE: Final = (4000, 3000)
-
-
-class _Canvas:
-    """An ImageDraw that takes output-pixel coordinates and draws at SUPERSAMPLE times them."""
-
-    def __init__(self, size: tuple[int, int], background: tuple[int, int, int]) -> None:
-        self.image = Image.new("RGB", (size[0] * SUPERSAMPLE, size[1] * SUPERSAMPLE), background)
-        self.draw = ImageDraw.Draw(self.image)
-
-    def line(self, points: Sequence[tuple[float, float]], colour, width: float = 1.0) -> None:
-        scaled = [(x * SUPERSAMPLE, y * SUPERSAMPLE) for x, y in points]
-        self.draw.line(scaled, fill=colour, width=max(1, round(width * SUPERSAMPLE)), joint="curve")
-
-    def dashed(self, a: tuple[float, float], b: tuple[float, float], colour, dash: float = 6.0):
-        length = math.dist(a, b)
-        count = max(1, int(length / dash))
-        for i in range(0, count, 2):
-            t0, t1 = i / count, min(i + 1, count) / count
-            self.line([_lerp(a, b, t0), _lerp(a, b, t1)], colour)
-
-    def circle(self, centre, radius: float, *, fill=None, outline=None, width: float = 1.0):
-        x, y, r = (v * SUPERSAMPLE for v in (*centre, radius))
-        self.draw.ellipse(
-            (x - r, y - r, x + r, y + r),
-            fill=fill,
-            outline=outline,
-            width=max(1, round(width * SUPERSAMPLE)),
-        )
-
-    def rect(self, box, *, fill=None, outline=None, width: float = 1.0) -> None:
-        self.draw.rectangle(
-            [v * SUPERSAMPLE for v in box],
-            fill=fill,
-            outline=outline,
-            width=max(1, round(width * SUPERSAMPLE)),
-        )
-
-    def text(self, xy, text: str, colour=_INK, size: float = 13, anchor: str = "la") -> None:
-        self.draw.text(
-            (xy[0] * SUPERSAMPLE, xy[1] * SUPERSAMPLE),
-            text,
-            fill=colour,
-            font=_font(round(size * SUPERSAMPLE)),
-            anchor=anchor,
-        )
-
-    def text_width(self, text: str, size: float = 13) -> float:
-        return self.draw.textlength(text, font=_font(round(size * SUPERSAMPLE))) / SUPERSAMPLE
-
-    def finish(self) -> Image.Image:
-        width, height = self.image.size
-        return self.image.resize(
-            (width // SUPERSAMPLE, height // SUPERSAMPLE), Image.Resampling.LANCZOS
-        )
-
-
-def _font(size: int) -> ImageFont.FreeTypeFont | ImageFont.ImageFont:
-    if size not in _FONTS:
-        _FONTS[size] = ImageFont.load_default(size=size)
-    return _FONTS[size]
-
-
-_FONTS: dict[int, ImageFont.FreeTypeFont | ImageFont.ImageFont] = {}
-
-
-def _lerp(a, b, t: float) -> tuple[float, float]:
-    return (a[0] + (b[0] - a[0]) * t, a[1] + (b[1] - a[1]) * t)
-
-
-def _colour(comparison: Comparison, solver: str) -> tuple[int, int, int]:
-    if solver in SOLVER_COLOURS:
-        return SOLVER_COLOURS[solver]
-    others = [r.solver for r in comparison.runs if r.solver not in SOLVER_COLOURS]
-    return _EXTRA_COLOURS[others.index(solver) % len(_EXTRA_COLOURS)]
-
-
-def render_comparison(comparison: Comparison, size: tuple[int, int] = (1200, 560)) -> Image.Image:
-    """The comparison as a picture: error against time per solver (left), paths (right).
-
-    The left panel plots the end-effector error (px, log scale: errors span from hundreds of px
-    down to fractions of one) against simulated time, one coloured line per solver, with the
-    reach tolerance dashed. The right panel draws each solver's end-effector path in its own
-    small map, all at one scale, with the start pose, the base and the numbered targets.
-
-    >>> render_comparison  # doctest: +ELLIPSIS
-    <function render_comparison at ...>
-    """
-    width, height = _check_size(size)
-    canvas = _Canvas((width, height), _BACKGROUND)
-    canvas.text((16, 12), f"{comparison.level}: solver comparison", size=17)
-    split = round(width * 0.5)
-    _legend(canvas, comparison, (16, 42), split - 24)
-    _error_panel(canvas, comparison, (66, 94, split - 24, height - 48))
-    _path_panels(canvas, comparison, (split + 8, 12, width - 12, height - 12))
-    return canvas.finish()
-
-
-def _check_size(size: object) -> tuple[int, int]:
-    try:
-        width, height = size  # type: ignore[misc]
-    except (TypeError, ValueError):
-        raise ValueError(f"size must be (width, height) in px, got {size!r}") from None
-    for value in (width, height):
-        if isinstance(value, bool) or not isinstance(value, int):
-            raise ValueError(f"size must be two ints, got {size!r}")
-    if not (_MIN_SIZE[0] <= width <= _MAX_SIZE[0] and _MIN_SIZE[1] <= height <= _MAX_SIZE[1]):
-        raise ValueError(
-            f"size must be from {_MIN_SIZE[0]}x{_MIN_SIZE[1]} to {_MAX_SIZE[0]}x{_MAX_SIZE[1]} "
-            f"px, got {width}x{height}"
-        )
-    return width, height
-
-
-def _error_panel(canvas: _Canvas, comparison: Comparison, box) -> None:
-    left, top, right, bottom = box
-    finite = np.concatenate([r.errors[np.isfinite(r.errors)] for r in comparison.runs])
-    positive = finite[finite > 0]
-    low = max(ERROR_FLOOR, float(positive.min()) if positive.size else 1.0)
-    high = float(finite.max()) if finite.size else 10.0
-    if comparison.tolerance is not None:
-        high = max(high, comparison.tolerance)
-    lo_exp, hi_exp = math.floor(math.log10(low)), math.ceil(math.log10(high))
-    hi_exp = max(hi_exp, lo_exp + 1)
-    t_max = max((r.sim_time for r in comparison.runs), default=1.0) or 1.0
-
-    def px(t: float, e: float) -> tuple[float, float]:
-        frac = (math.log10(max(e, 10.0**lo_exp)) - lo_exp) / (hi_exp - lo_exp)
-        return (left + (right - left) * t / t_max, bottom - (bottom - top) * frac)
-
-    for exp in range(lo_exp, hi_exp + 1):
-        y = px(0.0, 10.0**exp)[1]
-        canvas.line([(left, y), (right, y)], _GRID)
-        canvas.text((left - 7, y), _decade_label(exp), _MUTED, 12, "rm")
-        for minor in range(2, 10) if exp < hi_exp else ():
-            ym = px(0.0, minor * 10.0**exp)[1]
-            canvas.line([(left - 3, ym), (left, ym)], _FAINT)
-    step = _nice_step(t_max / 6)
-    for i in range(int(t_max / step + 1e-9) + 1):
-        x = px(i * step, 1.0)[0]
-        canvas.line([(x, top), (x, bottom)], _GRID)
-        canvas.line([(x, bottom), (x, bottom + 4)], _INK)
-        canvas.text((x, bottom + 7), f"{i * step:g}", _MUTED, 12, "ma")
-    canvas.line([(left, top), (left, bottom), (right, bottom)], _INK)
-    title = "end-effector error (px, log scale)"
-    if comparison.tolerance is not None:
-        title += ", dashed: reach tolerance"
-    canvas.text((left - 50, top - 22), title, _INK, 13)
-    canvas.text(((left + right) / 2, bottom + 25), "simulated time (s)", _INK, 13, "ma")
-    if comparison.tolerance is not None:
-        # Marked on the axis, not in the plot, where a label would hide the lines it labels.
-        y = px(0.0, comparison.tolerance)[1]
-        canvas.dashed((left, y), (right, y), _MUTED)
-        canvas.text((left - 7, y), f"{comparison.tolerance:g}", _MUTED, 11, "rm")
-    # The first solver is drawn last, on top: it is usually the reference.
-    for run in reversed(comparison.runs):
-        for segment in _finite_segments(run.times, run.errors):
-            canvas.line([px(t, e) for t, e in segment], _colour(comparison, run.solver), 1.6)
-
-
-def _legend(canvas: _Canvas, comparison: Comparison, top_left, right: float) -> None:
-    """One entry per solver (line, name, status), flowing left to right, wrapping at ``right``."""
-    x, y = top_left
-    for run in comparison.runs:
-        text = f"{run.solver} ({run.status}, {run.sim_time:.2f} s)"
-        entry = 30 + canvas.text_width(text, 12) + 18
-        if x > top_left[0] and x + entry > right:
-            x, y = top_left[0], y + 18
-        canvas.line([(x, y), (x + 24, y)], _colour(comparison, run.solver), 3.0)
-        canvas.text((x + 30, y), text, _INK, 12, "lm")
-        x += entry
-
-
-def _finite_segments(times: np.ndarray, values: np.ndarray) -> list[list[tuple[float, float]]]:
-    """Runs of consecutive finite samples: a tick without a target breaks the line."""
-    segments, current = [], []
-    for t, v in zip(times.tolist(), values.tolist(), strict=True):
-        if math.isfinite(v):
-            current.append((t, v))
-        elif current:
-            segments.append(current)
-            current = []
-    if current:
-        segments.append(current)
-    return [s if len(s) > 1 else s * 2 for s in segments]
-
-
-def _decade_label(exp: int) -> str:
-    return f"{10.0**exp:g}" if -3 <= exp <= 4 else f"1e{exp}"
-
-
-def _nice_step(raw: float) -> float:
-    """The smallest of 1, 2, 5 x 10^k at least ``raw``."""
-    base = 10.0 ** math.floor(math.log10(raw))
-    return next(m * base for m in (1, 2, 5, 10) if m * base >= raw - 1e-12)
-
-
-def _path_panels(canvas: _Canvas, comparison: Comparison, box) -> None:
-    left, top, right, bottom = box
-    count = len(comparison.runs)
-    cols = 1 if count == 1 else 2
-    rows = math.ceil(count / cols)
-    gap = 10
-    cell_w = (right - left - gap * (cols - 1)) / cols
-    cell_h = (bottom - top - gap * (rows - 1)) / rows
-    points = [comparison.start_pose, comparison.reach_points, np.array([comparison.base])]
-    points += [run.path for run in comparison.runs]
-    every = np.concatenate([p.reshape(-1, 2) for p in points])
-    every = every[np.all(np.isfinite(every), axis=1)]
-    lo, hi = every.min(axis=0), every.max(axis=0)
-    span = np.maximum(hi - lo, 1.0)
-    header, margin = 22, 20  # px: the cell's title row; room for target numbers at the edges
-    scale = min((cell_w - 2 * margin) / span[0], (cell_h - header - 2 * margin) / span[1])
-    for i, run in enumerate(comparison.runs):
-        x0 = left + (i % cols) * (cell_w + gap)
-        y0 = top + (i // cols) * (cell_h + gap)
-        centre = np.array([x0 + cell_w / 2, y0 + header + (cell_h - header) / 2])
-        mid = (lo + hi) / 2
-
-        def to_px(p, centre=centre, mid=mid) -> list[tuple[float, float]]:
-            p = np.asarray(p, dtype=float).reshape(-1, 2)
-            x = centre[0] + (p[:, 0] - mid[0]) * scale
-            y = centre[1] - (p[:, 1] - mid[1]) * scale
-            return list(zip(x.tolist(), y.tolist(), strict=True))
-
-        _path_cell(canvas, comparison, run, (x0, y0, x0 + cell_w, y0 + cell_h), to_px, scale)
-
-
-def _path_cell(canvas: _Canvas, comparison: Comparison, run: SolverRun, box, to_px, scale):
-    x0, y0, x1, y1 = box
-    colour = _colour(comparison, run.solver)
-    canvas.rect(box, outline=_FAINT)
-    canvas.text((x0 + 8, y0 + 6), run.solver, colour, 14)
-    room = x1 - x0 - 24 - canvas.text_width(run.solver, 14)
-    for info in (f"path {run.path_length:.0f} px, {run.status}", f"{run.path_length:.0f} px"):
-        if canvas.text_width(info, 12) <= room:
-            canvas.text((x1 - 8, y0 + 7), info, _MUTED, 12, "ra")
-            break
-    # Content is clipped to the cell by drawing it on a sub-canvas of the cell's size.
-    cell = _Canvas((round(x1 - x0) - 2, round(y1 - y0) - 24), _BACKGROUND)
-
-    def local(points) -> list[tuple[float, float]]:
-        return [(x - x0 - 1, y - y0 - 23) for x, y in to_px(points)]
-
-    base = local(comparison.base)[0]
-    cell.circle(base, comparison.reach * scale, outline=_GRID)
-    cell.line(local(comparison.start_pose), _FAINT, 4.0)
-    # A wide pale band under the effector's line: the route the target took.
-    for trail in _moving_targets(run):
-        cell.line(local(trail), _GRID, 7.0)
-    cell.line(local(run.path), colour, 1.5)
-    cell.circle(local(run.path[-1])[0], 3.0, fill=colour)
-    cell.rect((base[0] - 4, base[1] - 4, base[0] + 4, base[1] + 4), fill=_INK)
-    for number, point in enumerate(local(comparison.reach_points), start=1):
-        cell.circle(point, 6.0, outline=_INK, width=1.5)
-        cell.text((point[0] + 8, point[1] - 8), str(number), _INK, 12, "lb")
-    canvas.image.paste(cell.image, (round((x0 + 1) * SUPERSAMPLE), round((y0 + 23) * SUPERSAMPLE)))
-
-
-def _moving_targets(run: SolverRun) -> list[np.ndarray]:
-    """The target's path during each step whose target moves (a follow step), px."""
-    trails = []
-    for step in run.steps:
-        if step.kind == "reach":
-            continue
-        targets = run.targets[_step_ticks(run, step)]
-        targets = targets[np.all(np.isfinite(targets), axis=1)]
-        if len(targets) > 1 and np.ptp(targets, axis=0).max() > 0.0:
-            trails.append(targets)
-    return trails

@@ -1,4 +1,6 @@
-"""Solver comparison: one run per solver, sane metrics, deterministic JSON, a readable plot."""
+"""Solver comparison: one run per solver, sane metrics, deterministic JSON, the plot's data.
+
+The drawing itself is tested on synthetic data in tests/render/test_plot.py."""
 
 from __future__ import annotations
 
@@ -12,19 +14,17 @@ from rich.console import Console
 
 from ikgame.compare import (
     DEFAULT_SOLVERS,
-    SOLVER_COLOURS,
     _mean_squared_jerk,
-    _moving_targets,
     _tracking_error,
     compare_level,
     comparison_table,
-    render_comparison,
     squared_jerk,
     write_comparison,
 )
 from ikgame.kinematics import SOLVERS
 from ikgame.level.model import Level
 from ikgame.level.script import StepOutcome
+from ikgame.render.plot import SOLVER_COLOURS
 
 FIRST_TARGET = (180.0, 120.0)
 TOLERANCE = 6.0
@@ -104,21 +104,32 @@ def test_compare_json_is_deterministic_apart_from_wall_clock(comparison, tmp_pat
     assert _without_wall_clock(first) == _without_wall_clock(second)
 
 
-def test_write_comparison_writes_json_and_png_of_the_default_size(comparison, tmp_path):
+def test_write_comparison_writes_json_and_a_png_with_every_solver(comparison, tmp_path):
     paths = write_comparison(tmp_path / "out", comparison)
     assert [p.name for p in paths] == ["compare.json", "compare.png"]
     with Image.open(paths[1]) as image:
         assert image.size == (1200, 560)
-
-
-def test_plot_has_the_requested_size_and_every_solver_colour(comparison):
-    image = render_comparison(comparison, size=(900, 420))
-    assert image.size == (900, 420)
-    pixels = np.asarray(image.convert("RGB"), dtype=int).reshape(-1, 3)
-    assert len(np.unique(pixels, axis=0)) > 50  # not blank
+        pixels = np.asarray(image.convert("RGB"), dtype=int).reshape(-1, 3)
     for solver in DEFAULT_SOLVERS:
         distance = np.abs(pixels - SOLVER_COLOURS[solver]).sum(axis=1)
         assert (distance < 30).sum() > 100, solver
+
+
+def test_plot_data_is_the_runs_and_the_level_as_measured(comparison):
+    plot = comparison.plot_data()
+    assert plot.level == comparison.level and plot.tolerance == TOLERANCE
+    assert [t.solver for t in plot.traces] == [r.solver for r in comparison.runs]
+    for trace, run in zip(plot.traces, comparison.runs, strict=True):
+        assert (trace.status, trace.sim_time, trace.path_length) == (
+            run.status,
+            run.sim_time,
+            run.path_length,
+        )
+        np.testing.assert_array_equal(trace.errors, run.errors)
+        np.testing.assert_array_equal(trace.path, run.path)
+        assert trace.target_trails == ()  # reach steps only
+    np.testing.assert_array_equal(plot.reach_points, comparison.reach_points)
+    np.testing.assert_array_equal(plot.start_pose, comparison.start_pose)
 
 
 def test_table_has_a_row_per_solver(comparison):
@@ -138,7 +149,6 @@ def test_ticks_without_a_target_break_the_error_line_and_skip_the_solver():
     run = compare_level(level, ["ccd"]).runs[0]
     assert np.isnan(run.errors[:30]).all() and np.isfinite(run.errors[-1])
     assert run.solver_calls == run.ticks - 30
-    assert render_comparison(compare_level(level, ["ccd"])).size == (1200, 560)
 
 
 def test_a_follow_step_gives_a_tracking_error_and_a_target_trail():
@@ -158,14 +168,14 @@ def test_a_follow_step_gives_a_tracking_error_and_a_target_trail():
     comparison = compare_level(level, ["ccd", "dls"])
     for run in comparison.runs:
         assert run.tracking_error is not None and 0.0 <= run.tracking_error < 40.0
-        (trail,) = _moving_targets(run)
+    for trace in comparison.plot_data().traces:
+        (trail,) = trace.target_trails
         np.testing.assert_allclose(np.hypot(trail[:, 0], trail[:, 1] - 150.0), 40.0)
     assert comparison.reach_points.shape == (0, 2)
     console = Console(width=240, record=True)
     console.print(comparison_table(comparison))
     text = console.export_text()
     assert "tracking error (px)" in text and "final error" not in text
-    assert render_comparison(comparison).size == (1200, 560)
 
 
 def test_progress_rises_to_one():
@@ -193,12 +203,6 @@ def test_bad_solver_lists_are_refused(solvers, message):
 def test_asking_for_a_solver_not_compared_names_the_compared_ones(comparison):
     with pytest.raises(ValueError, match="has: ccd, jacobian_transpose, dls, fabrik"):
         comparison.run("newton")
-
-
-@pytest.mark.parametrize("size", [(100, 100), (1200.0, 560), "big", (1200,)])
-def test_bad_plot_sizes_are_refused(comparison, size):
-    with pytest.raises(ValueError, match="size must be"):
-        render_comparison(comparison, size=size)
 
 
 def test_jerk_of_a_cubic_is_six_per_joint_squared():

@@ -1,7 +1,7 @@
 """Draw docs/figures/compare_<level>.png and print the tables of docs/solvers.md.
 
 Each shipped level in ``LEVELS`` is run once per solver in the physics world with
-:func:`ikgame.compare.compare_level`; the figure is :func:`ikgame.compare.render_comparison`.
+:func:`ikgame.compare.compare_level`; the figure is :func:`ikgame.render.plot.render_comparison`.
 The printed Markdown has, per level, the comparison table, each reach step's convergence (time
 to reach the tolerance, time from which the error stays within ``FINE`` px), the hold analysis of
 every step some solver failed, and the solvers alone without physics (the seed article's setting): the error
@@ -26,19 +26,13 @@ from pathlib import Path
 import numpy as np
 
 from ikgame._files import write_atomic
-from ikgame.compare import (
-    DEFAULT_SOLVERS,
-    Comparison,
-    SolverRun,
-    compare_level,
-    render_comparison,
-    squared_jerk,
-)
+from ikgame.compare import DEFAULT_SOLVERS, Comparison, SolverRun, compare_level, squared_jerk
 from ikgame.kinematics import SOLVERS
 from ikgame.level.library import LEVELS_DIR
 from ikgame.level.loader import load_level
 from ikgame.level.model import Level
 from ikgame.physics.world import build_skeleton
+from ikgame.render.plot import render_comparison
 
 LEVELS = ("01_first_reach", "02_tentacle", "03_elbow_limits", "06_circle")
 FIGURES = Path(__file__).resolve().parent
@@ -67,7 +61,7 @@ def main() -> int:
         level = load_level(LEVELS_DIR / f"{stem}.toml")
         comparison = best_of(level, REPEATS)
         buffer = io.BytesIO()
-        render_comparison(comparison).save(buffer, format="PNG", optimize=True)
+        render_comparison(comparison.plot_data()).save(buffer, format="PNG", optimize=True)
         path = write_atomic(FIGURES / f"compare_{stem}.png", buffer.getvalue())
         print(f"\n## {comparison.level} ({stem}.toml) -> {path.name}, {path.stat().st_size} B\n")
         print(summary_table(comparison))
