@@ -311,8 +311,9 @@ class Simulation:
 def run_level(level: Level, *, solver: str | None = None, record: bool = True) -> Simulation:
     """Run ``level`` to the end and return the finished :class:`Simulation`.
 
-    >>> run_level  # doctest: +ELLIPSIS
-    <function run_level at ...>
+    >>> from ikgame.level import DEFAULT_LEVEL, load_level
+    >>> run_level(load_level(DEFAULT_LEVEL), record=False).result.status
+    'passed'
     """
     sim = Simulation(level, solver=solver, record=record)
     sim.run()
