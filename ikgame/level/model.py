@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import math
 import re
-from typing import Annotated, Final, Literal
+from typing import Annotated, Final, Literal, get_args
 
 from pydantic import (
     BaseModel,
@@ -85,8 +85,6 @@ MAX_TICKS: Final = 300_000
 MAX_COORD: Final = 1.0e5
 """Largest coordinate or length, px: beyond it the camera and physics lose all meaning."""
 
-SOLVER_NAMES: Final = ("ccd", "jacobian_transpose", "dls", "fabrik")
-
 # Printable text only: a level's names end up in terminals and pictures.
 _NAME_PATTERN: Final = r"^[^\x00-\x1f\x7f]*$"
 _TEXT_PATTERN: Final = r"^[^\x00-\x09\x0b-\x1f\x7f]*$"
@@ -104,6 +102,8 @@ Tolerance = Annotated[float, Field(gt=0, le=1000, allow_inf_nan=False)]
 Gain = Annotated[float, Field(gt=0, le=1000, allow_inf_nan=False)]
 Name = Annotated[str, Field(min_length=1, max_length=40, pattern=_NAME_PATTERN)]
 SolverName = Literal["ccd", "jacobian_transpose", "dls", "fabrik"]
+SOLVER_NAMES: Final = get_args(SolverName)
+"""The solvers a level may name (``ikgame.kinematics.SOLVERS`` has one of each, by test)."""
 
 
 def _invalid(loc: tuple[str | int, ...], message: str, value: object) -> ValidationError:

@@ -191,3 +191,10 @@ def _toml(value: object) -> str:
     if isinstance(value, list):
         return "[" + ", ".join(_toml(v) for v in value) + "]"
     return str(value)
+
+
+def test_the_solver_names_a_level_may_use_are_the_registered_solvers():
+    from ikgame.kinematics import SOLVERS
+    from ikgame.level.model import SOLVER_NAMES
+
+    assert sorted(SOLVER_NAMES) == sorted(SOLVERS)
