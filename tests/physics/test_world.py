@@ -6,9 +6,9 @@ import numpy as np
 import pymunk
 import pytest
 
+from ikgame.kinematics import forward_kinematics
 from ikgame.level.model import Level
 from ikgame.physics.world import World, build_skeleton
-from ikgame.kinematics import forward_kinematics
 
 
 def _level(links, *, gravity=(0.0, 0.0), obstacles=(), angle=90.0, base=(0.0, 0.0)) -> Level:
