@@ -253,12 +253,13 @@ class World:
         self.skeleton = self.skeleton.moved_to(self.base_body.position)
 
     def diverged(self) -> bool:
-        """True when any body's pose is NaN, infinite, or absurdly far away.
+        """True when any link's or prop's pose is NaN, infinite, or absurdly far away.
 
         A blow-up shows in positions within a tick or two, so velocities are not read.
         """
+        bodies = self.bodies + self.prop_bodies
         values = np.fromiter(
-            (v for b in self.bodies for v in (*b.position, b.angle)), float, 3 * self.count
+            (v for b in bodies for v in (*b.position, b.angle)), float, 3 * len(bodies)
         )
         return not (np.all(np.isfinite(values)) and np.all(np.abs(values) < DIVERGENCE_LIMIT))
 

@@ -102,3 +102,18 @@ def test_base_joint_limit_is_relative_to_the_mount_direction():
     for _ in range(240):
         world.step(1 / 240)
     assert world.joint_angles()[0] == pytest.approx(math.radians(-20.0), abs=math.radians(1.0))
+
+
+def test_a_prop_blowing_up_counts_as_divergence():
+    level = Level.model_validate(
+        {
+            "level": {"name": "t", "duration": 1.0},
+            "chain": {"links": [{"length": 50.0}]},
+            "props": [{"kind": "ball", "name": "b", "position": [80, 0], "radius": 5}],
+            "script": [{"wait": 1.0}],
+        }
+    )
+    world = World(level)
+    assert not world.diverged()
+    world.prop_bodies[0].position = (math.inf, 0.0)
+    assert world.diverged()
