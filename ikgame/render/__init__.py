@@ -2,8 +2,9 @@
 sheet, baked motion)."""
 
 from ikgame.render.camera import Camera
+from ikgame.render.debug_draw import PillowDrawOptions
 from ikgame.render.export import check_out_dir, export_run, motion_json, parse_size, trail_at
-from ikgame.render.pillow import PillowDrawOptions, render_snapshot, to_draw_coords
+from ikgame.render.pillow import render_snapshot, to_draw_coords
 from ikgame.render.plot import ComparisonPlot, SolverTrace, render_comparison
 from ikgame.render.theme import Theme, available_themes, load_theme
 

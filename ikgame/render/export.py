@@ -6,7 +6,8 @@ can be drawn in worker processes; every byte that ends up in a file comes from t
 deterministic functions either way, so a parallel export is identical to a serial one. Files are
 written to a temporary name in their folder and renamed into place, so a reader never sees half a
 file, and an interrupted export leaves no stray temporaries. The GIF and APNG are streamed one
-frame at a time, so a long run does not hold its frames in memory.
+frame at a time, so a long run does not hold its frames in memory; their file formats are written
+by :mod:`ikgame.render.animation`, while this module decides what goes into them.
 """
 
 from __future__ import annotations
@@ -17,7 +18,6 @@ import math
 import multiprocessing
 import os
 import re
-import struct
 import sys
 import zlib
 from collections import deque
@@ -25,17 +25,16 @@ from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import Future, ProcessPoolExecutor
 from contextlib import ExitStack, contextmanager
 from dataclasses import dataclass
-from fractions import Fraction
-from functools import lru_cache
 from pathlib import Path
-from typing import IO, Any
+from typing import Any
 
 import numpy as np
-from PIL import GifImagePlugin, Image, ImageDraw, ImageFont
+from PIL import Image, ImageDraw, ImageFont
 from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 
 from ikgame._files import atomic_open, write_atomic
+from ikgame.render.animation import ApngWriter, GifWriter, build_palette, gif_durations, quantizer
 from ikgame.render.camera import Camera
 from ikgame.render.pillow import render_snapshot
 from ikgame.render.theme import Theme, load_theme
@@ -48,9 +47,6 @@ MAX_SIDE = 3840  # px, either side
 MAX_PIXELS = 3840 * 2160  # a 4K frame; more is a typo or a hostile level, not a devlog GIF
 TRAIL_SECONDS = 1.5  # s of end-effector path drawn behind it
 GIF_MAX_FPS = 50.0  # browsers play GIF delays under 2 cs as 10 cs, so faster runs drop frames
-GIF_COLORS = 255  # palette entries for pixels; the 256th is the transparent "unchanged" index
-GIF_TRANSPARENT = 255
-GIF_FREQUENT = 64  # most common exact colours kept as they are: the flat fills never dither
 SHEET_THUMBS = 12
 SHEET_COLUMNS = 4
 SHEET_THUMB_WIDTH = 320  # px, at most
@@ -59,7 +55,6 @@ PARALLEL_MIN_FRAMES = 48  # shorter runs finish before worker processes would ha
 MAX_AUTO_WORKERS = 8
 _FRAME_NAME = re.compile(r"\d{6}\.png")
 _SIZE = re.compile(r"(-?\d+)\s*[xX]\s*(-?\d+)")
-_PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 
 
 # -- input checks --------------------------------------------------------------------------------
@@ -235,7 +230,7 @@ class _Job:
         png = _png_bytes(image) if self.png else None
         indices = None
         if palette is not None and index % self.gif_stride == 0:
-            indices = _quantizer(palette).indices(image)
+            indices = quantizer(palette).indices(image)
         return png, indices
 
 
@@ -354,216 +349,6 @@ def _sample_indices(count: int, wanted: int) -> list[int]:
     return sorted({round(v) for v in np.linspace(0, count - 1, min(wanted, count))})
 
 
-# -- GIF -----------------------------------------------------------------------------------------
-
-
-def _build_palette(samples: Sequence[Image.Image], theme: Theme) -> bytes:
-    """One palette for the whole GIF, ``GIF_COLORS`` RGB entries, from a sample of frames.
-
-    The theme's colours and the samples' most common exact colours come first, so flat fills
-    map to themselves with no dithering; the rest of the entries adapt (median cut) to the
-    remaining pixels: anti-aliased edges, the trail's fade, text.
-    """
-    stacked = Image.fromarray(np.vstack([np.asarray(im.convert("RGB")) for im in samples]))
-    counts = stacked.getcolors(stacked.width * stacked.height) or []
-    counts.sort(key=lambda item: (-item[0], item[1]))
-    fixed = list(dict.fromkeys(theme.colors() + [rgb for _, rgb in counts[:GIF_FREQUENT]]))
-    fixed = fixed[:GIF_COLORS]
-    taken = set(fixed)
-    rest = [(n, rgb) for n, rgb in counts if rgb not in taken]
-    room = GIF_COLORS - len(fixed)
-    if len(rest) <= room:
-        adaptive = [rgb for _, rgb in rest]
-    else:
-        weights = np.array([n for n, _ in rest])
-        pixels = np.repeat(np.array([rgb for _, rgb in rest], dtype=np.uint8), weights, axis=0)
-        strip = Image.fromarray(pixels.reshape(1, -1, 3))
-        quantized = strip.quantize(room, method=Image.Quantize.MEDIANCUT, dither=Image.Dither.NONE)
-        flat = quantized.getpalette() or []
-        adaptive = [tuple(flat[i : i + 3]) for i in range(0, 3 * room, 3)]
-    colors = list(dict.fromkeys(fixed + adaptive))
-    # Pad by repeating the background: duplicates are harmless, the quantizer picks the first.
-    colors += [colors[0]] * (GIF_COLORS - len(colors))
-    return bytes(c for rgb in colors[:GIF_COLORS] for c in rgb)
-
-
-class _Quantizer:
-    """Maps RGB frames to palette indices: a colour in the palette to itself, any other to the
-    nearest entry, with no dithering.
-
-    Pillow's own palette mapping looks colours up on a coarse colour cube, so even a flat
-    background can land on a neighbouring entry; this looks up exact 24-bit colours instead, in
-    a table filled as colours first appear (frames reuse almost all of them).
-    """
-
-    _UNKNOWN = 0xFFFF
-
-    def __init__(self, palette: bytes) -> None:
-        self.colors = np.frombuffer(palette, dtype=np.uint8).reshape(-1, 3).astype(np.int32)
-        self.table = np.full(1 << 24, self._UNKNOWN, dtype=np.uint16)  # 32 MB
-
-    def indices(self, image: Image.Image) -> bytes:
-        # RGBX is Pillow's own layout: one little-endian uint32 per pixel, R in the low byte,
-        # X masked off.
-        rgbx = image.convert("RGB").tobytes("raw", "RGBX")
-        packed = np.frombuffer(rgbx, dtype="<u4") & 0xFFFFFF
-        found = self.table[packed]
-        missing = found == self._UNKNOWN
-        if missing.any():
-            new = np.unique(packed[missing])
-            self.table[new] = self._nearest(new)
-            found = self.table[packed]
-        return found.astype(np.uint8).tobytes()
-
-    def _nearest(self, packed: np.ndarray) -> np.ndarray:
-        # Weighted RGB distance (2, 4, 3): a cheap stand-in for perceived difference.
-        weights = np.array([2, 4, 3], dtype=np.int64)
-        out = np.empty(len(packed), dtype=np.uint16)
-        for start in range(0, len(packed), 4096):
-            block = packed[start : start + 4096].astype(np.int64)
-            rgb = np.stack([block & 255, block >> 8 & 255, block >> 16], axis=1)
-            diff = rgb[:, None, :] - self.colors[None, :, :]
-            out[start : start + 4096] = np.argmin((diff * diff * weights).sum(axis=2), axis=1)
-        return out
-
-
-@lru_cache(maxsize=1)
-def _quantizer(palette: bytes) -> _Quantizer:
-    """One quantizer per palette and process, so its table fills once per export."""
-    return _Quantizer(palette)
-
-
-def _gif_durations(frames: int, fps: float, stride: int) -> list[int]:
-    """Per-frame GIF delays in ms, each a whole number of centiseconds (the GIF unit).
-
-    Each delay is the gap between rounded frame times, so delays alternate (30 fps: 30, 40,
-    30 ms ...) and the total never drifts from the run's length by more than half a centisecond.
-    """
-    edges = [math.floor(k * stride * 100 / fps + 0.5) for k in range(frames + 1)]
-    return [10 * (b - a) for a, b in zip(edges[:-1], edges[1:], strict=True)]
-
-
-class _GifWriter:
-    """Streams a looping GIF: one global palette, and each frame after the first stored as the
-    rectangle that changed, unchanged pixels transparent (they compress to almost nothing)."""
-
-    def __init__(self, fp: IO[bytes], size: tuple[int, int], palette: bytes) -> None:
-        self.fp = fp
-        self.size = size
-        self.palette = palette + palette[:3]  # the transparent slot; its colour never shows
-        self.previous: np.ndarray | None = None
-        width, height = size
-        # Logical screen: 0xF7 = global colour table of 256 entries, 8 bits per primary.
-        fp.write(b"GIF89a" + struct.pack("<HHBBB", width, height, 0xF7, 0, 0) + self.palette)
-        # NETSCAPE2.0 application extension: loop count 0 = forever.
-        fp.write(b"!\xff\x0bNETSCAPE2.0\x03\x01" + struct.pack("<H", 0) + b"\x00")
-
-    def add(self, indices: bytes, duration_ms: int) -> None:
-        width, height = self.size
-        frame = np.frombuffer(indices, dtype=np.uint8).reshape(height, width)
-        # Disposal 1 (leave in place): each frame draws over the previous one.
-        params: dict[str, int] = {"duration": duration_ms, "disposal": 1}
-        if self.previous is None:
-            region, offset = frame, (0, 0)
-        else:
-            changed = frame != self.previous
-            rows, cols = np.flatnonzero(changed.any(axis=1)), np.flatnonzero(changed.any(axis=0))
-            if rows.size == 0:
-                # An unchanged frame still takes its time: one transparent pixel.
-                region, offset = np.full((1, 1), GIF_TRANSPARENT, dtype=np.uint8), (0, 0)
-            else:
-                y0, y1, x0, x1 = rows[0], rows[-1] + 1, cols[0], cols[-1] + 1
-                region = frame[y0:y1, x0:x1].copy()
-                region[~changed[y0:y1, x0:x1]] = GIF_TRANSPARENT
-                offset = (int(x0), int(y0))
-            params["transparency"] = GIF_TRANSPARENT
-        image = Image.frombytes("P", (region.shape[1], region.shape[0]), region.tobytes())
-        image.putpalette(self.palette)
-        for block in GifImagePlugin.getdata(image, offset, **params):
-            self.fp.write(block)
-        self.previous = frame
-
-    def close(self) -> None:
-        self.fp.write(b";")
-
-
-# -- APNG ----------------------------------------------------------------------------------------
-
-
-def _png_chunks(data: bytes) -> Iterator[tuple[bytes, bytes]]:
-    if not data.startswith(_PNG_SIGNATURE):
-        raise ValueError("not a PNG stream")
-    pos = len(_PNG_SIGNATURE)
-    while pos < len(data):
-        (length,) = struct.unpack(">I", data[pos : pos + 4])
-        kind = data[pos + 4 : pos + 8]
-        yield kind, data[pos + 8 : pos + 8 + length]
-        pos += 12 + length
-
-
-def _chunk(kind: bytes, body: bytes) -> bytes:
-    return struct.pack(">I", len(body)) + kind + body + struct.pack(">I", zlib.crc32(kind + body))
-
-
-class _ApngWriter:
-    """Streams an APNG from already-encoded PNG frames: each frame's image data is reused as is
-    (IDAT for the first frame, fdAT for the others), so nothing is encoded twice."""
-
-    def __init__(self, fp: IO[bytes], frames: int, size: tuple[int, int], fps: float) -> None:
-        self.fp = fp
-        self.frames = frames
-        self.size = size
-        delay = 1 / Fraction(fps).limit_denominator(1000)
-        if delay.numerator > 0xFFFF or delay.denominator > 0xFFFF:
-            raise ValueError(f"fps {fps} cannot be written as an APNG frame delay")
-        self.delay = delay
-        self.sequence = 0
-        self.written = 0
-        fp.write(_PNG_SIGNATURE)
-
-    def add(self, png: bytes) -> None:
-        width, height = self.size
-        # fcTL: sequence, size, offset 0,0, delay, dispose op 0 (none), blend op 0 (source).
-        control = struct.pack(
-            ">IIIIIHHBB",
-            self.sequence,
-            width,
-            height,
-            0,
-            0,
-            self.delay.numerator,
-            self.delay.denominator,
-            0,
-            0,
-        )
-        self.sequence += 1
-        first = self.written == 0
-        control_written = False
-        for kind, body in _png_chunks(png):
-            if kind == b"IEND":
-                break
-            if kind == b"IDAT":
-                if not control_written:
-                    self.fp.write(_chunk(b"fcTL", control))
-                    control_written = True
-                if first:
-                    self.fp.write(_chunk(b"IDAT", body))
-                else:
-                    self.fp.write(_chunk(b"fdAT", struct.pack(">I", self.sequence) + body))
-                    self.sequence += 1
-            elif first:
-                self.fp.write(_chunk(kind, body))
-                if kind == b"IHDR":
-                    # acTL: frame count, plays 0 = loop forever; it must precede any IDAT.
-                    self.fp.write(_chunk(b"acTL", struct.pack(">II", self.frames, 0)))
-        self.written += 1
-
-    def close(self) -> None:
-        if self.written != self.frames:
-            raise ValueError(f"APNG announced {self.frames} frames but got {self.written}")
-        self.fp.write(_chunk(b"IEND", b""))
-
-
 # -- contact sheet -------------------------------------------------------------------------------
 
 
@@ -673,7 +458,7 @@ def export_run(
         written = _write_frames(out, job, workers, samples, frames, gif, apng, show_progress)
     finally:
         # The colour table is 32 MB: keep it no longer than the export that needed it.
-        _quantizer.cache_clear()
+        quantizer.cache_clear()
     if sheet:
         written.append(write_atomic(out / "sheet.png", _png_bytes(_contact_sheet(job, samples))))
     if motion:
@@ -708,16 +493,16 @@ def _write_frames(
         palette = None
         gif_writer = apng_writer = None
         if gif:
-            palette = _build_palette(_sample_images(job, pool, samples), job.theme)
+            palette = build_palette(_sample_images(job, pool, samples), job.theme)
             animations.append(out / "run.gif")
-            gif_writer = _GifWriter(files.enter_context(atomic_open(animations[-1])), size, palette)
-            durations = _gif_durations(
+            gif_writer = GifWriter(files.enter_context(atomic_open(animations[-1])), size, palette)
+            durations = gif_durations(
                 math.ceil(count / job.gif_stride), job.scene.fps, job.gif_stride
             )
         if apng:
             animations.append(out / "run.png")
             apng_file = files.enter_context(atomic_open(animations[-1]))
-            apng_writer = _ApngWriter(apng_file, count, size, job.scene.fps)
+            apng_writer = ApngWriter(apng_file, count, size, job.scene.fps)
         for index, (png, indices) in enumerate(_payloads(job, pool, workers, palette)):
             if frames:
                 assert png is not None

@@ -1,4 +1,4 @@
-"""Draw a :class:`~ikgame.snapshot.Snapshot` with Pillow, and any pymunk Space for debugging.
+"""Draw a :class:`~ikgame.snapshot.Snapshot` with Pillow.
 
 The scene is drawn at ``supersample`` times the output size and shrunk with a Lanczos filter:
 Pillow's primitives are not anti-aliased, and averaging many sub-pixels is the cheapest way to
@@ -14,19 +14,16 @@ Sizes below are in output pixels unless a name says otherwise.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
 from functools import lru_cache
 
 import numpy as np
-import pymunk
 from PIL import Image, ImageDraw, ImageFont
-from pymunk.space_debug_draw_options import SpaceDebugColor
 
 from ikgame.render.camera import Camera
 from ikgame.render.theme import RGB, Theme
 from ikgame.snapshot import Scene, Snapshot
 
-__all__ = ["PillowDrawOptions", "render_snapshot", "to_draw_coords"]
+__all__ = ["render_snapshot", "to_draw_coords"]
 
 MIN_LINK_WIDTH = 3.0  # px: thinner links vanish in a GIF
 LINK_OUTLINE = 1.5  # px around each link
@@ -47,7 +44,8 @@ def to_draw_coords(camera: Camera, points: object) -> np.ndarray:
     """Pillow drawing coordinates of world ``points`` (k, 2).
 
     Pillow puts integer coordinates on pixel centres while :class:`Camera` puts them on pixel
-    corners, hence the half-pixel shift. Every drawing in this module goes through here.
+    corners, hence the half-pixel shift. Every drawing in this module and in
+    :mod:`ikgame.render.debug_draw` goes through here.
 
     >>> to_draw_coords(Camera((10, 10)), [[0.0, 0.0]]).tolist()
     [[4.5, 4.5]]
@@ -237,7 +235,7 @@ class _Painter:
 
     def capsule(self, a: np.ndarray, b: np.ndarray, radius: float, fill: RGB) -> None:
         """A bar with round ends from ``a`` to ``b`` (drawing coords), ``radius`` drawing px."""
-        _capsule(self.draw, a, b, radius, fill)
+        draw_capsule(self.draw, a, b, radius, fill)
 
     def grid(self) -> None:
         step = _nice_step(GRID_STEP * self.ss / self.camera.scale)
@@ -432,10 +430,11 @@ def _upcoming(scene: Scene, snapshot: Snapshot) -> np.ndarray:
     return targets[:0]
 
 
-def _capsule(
+def draw_capsule(
     draw: ImageDraw.ImageDraw, a: np.ndarray, b: np.ndarray, radius: float, fill: tuple[int, ...]
 ) -> None:
-    """A bar of half-width ``radius`` with round ends, all in drawing coordinates."""
+    """A bar of half-width ``radius`` with round ends, all in drawing coordinates: a link, a
+    wall, a pymunk fat segment."""
     ax, ay = float(a[0]), float(a[1])
     bx, by = float(b[0]), float(b[1])
     length = math.hypot(bx - ax, by - ay)
@@ -522,100 +521,3 @@ def _draw_hud(image: Image.Image, scene: Scene, snapshot: Snapshot, theme: Theme
             draw.text((x, y), text, fill=color, font=font, anchor="la")
             x += draw.textlength(text, font=font)
         y += line_height
-
-
-# -- pymunk debug drawing ------------------------------------------------------------------------
-
-
-class PillowDrawOptions(pymunk.SpaceDebugDrawOptions):
-    """Draw any pymunk Space onto a Pillow image: ``space.debug_draw(options)``.
-
-    Only the five drawing primitives are overridden, each going through one world-to-pixel
-    transform (:func:`to_draw_coords`), so shape colours, flags and ``shape.color`` work as in
-    pymunk's own backends. Without a camera the world origin is the image's bottom-left corner,
-    1 world px per image px, y up.
-
-    >>> image = Image.new("RGB", (64, 64), "white")
-    >>> space = pymunk.Space()
-    >>> space.add(pymunk.Segment(space.static_body, (8, 8), (56, 8), 2))
-    >>> space.debug_draw(PillowDrawOptions(image))
-    >>> image.getpixel((32, 55)) != (255, 255, 255)
-    True
-    """
-
-    def __init__(self, image: Image.Image, camera: Camera | None = None) -> None:
-        super().__init__()
-        width, height = image.size
-        if camera is None:
-            camera = Camera((width, height), center=(width / 2, height / 2), scale=1.0)
-        if camera.size != image.size:
-            raise ValueError(f"camera size {camera.size} differs from image size {image.size}")
-        self.image = image
-        self.camera = camera
-        # "RGBA" drawing blends colours with alpha < 255 into an RGB image instead of ignoring it.
-        self._draw = ImageDraw.Draw(image, "RGBA")
-
-    def _px(self, point: Sequence[float]) -> np.ndarray:
-        return to_draw_coords(self.camera, [point])[0]
-
-    def draw_circle(
-        self,
-        pos: pymunk.Vec2d,
-        angle: float,
-        radius: float,
-        outline_color: SpaceDebugColor,
-        fill_color: SpaceDebugColor,
-    ) -> None:
-        x, y = self._px(pos)
-        r = max(radius * self.camera.scale, 0.5)
-        self._draw.ellipse(
-            (x - r, y - r, x + r, y + r), fill=fill_color.as_int(), outline=outline_color.as_int()
-        )
-        # A spoke from the centre shows the body's rotation.
-        edge = self._px(pos + pymunk.Vec2d.from_polar(radius, angle))
-        self._draw.line([(x, y), tuple(edge)], fill=outline_color.as_int(), width=1)
-
-    def draw_segment(self, a: pymunk.Vec2d, b: pymunk.Vec2d, color: SpaceDebugColor) -> None:
-        self._draw.line([tuple(self._px(a)), tuple(self._px(b))], fill=color.as_int(), width=1)
-
-    def draw_fat_segment(
-        self,
-        a: pymunk.Vec2d,
-        b: pymunk.Vec2d,
-        radius: float,
-        outline_color: SpaceDebugColor,
-        fill_color: SpaceDebugColor,
-    ) -> None:
-        _capsule(
-            self._draw,
-            self._px(a),
-            self._px(b),
-            max(radius * self.camera.scale, 0.5),
-            fill_color.as_int(),
-        )
-
-    def draw_polygon(
-        self,
-        verts: Sequence[pymunk.Vec2d],
-        radius: float,
-        outline_color: SpaceDebugColor,
-        fill_color: SpaceDebugColor,
-    ) -> None:
-        points = [tuple(self._px(v)) for v in verts]
-        self._draw.polygon(points, fill=fill_color.as_int(), outline=outline_color.as_int())
-        if radius > 0:
-            # A rounded polygon: its edges are fat segments, as in pymunk's own backends.
-            r = radius * self.camera.scale
-            for i in range(len(verts)):
-                _capsule(
-                    self._draw,
-                    self._px(verts[i]),
-                    self._px(verts[(i + 1) % len(verts)]),
-                    r,
-                    outline_color.as_int(),
-                )
-
-    def draw_dot(self, size: float, pos: pymunk.Vec2d, color: SpaceDebugColor) -> None:
-        # pymunk gives dot sizes in screen pixels (constraint anchors), so no camera scale.
-        x, y = self._px(pos)
-        self._draw.ellipse((x - size, y - size, x + size, y + size), fill=color.as_int())

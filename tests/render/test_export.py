@@ -14,7 +14,6 @@ from PIL import Image
 
 from ikgame.render import export
 from ikgame.render.export import check_out_dir, export_run, motion_json, parse_size
-from ikgame.render.theme import load_theme
 
 SIZE = (160, 90)
 
@@ -42,34 +41,6 @@ def test_frames_are_numbered_pngs_one_per_snapshot(tmp_path, run):
         assert image.format == "PNG" and image.size == SIZE and image.mode == "RGB"
 
 
-def test_gif_has_every_frame_right_durations_and_loops(tmp_path, run):
-    scene, snaps = run(7)
-    _export(tmp_path, scene, snaps)
-    with Image.open(tmp_path / "run.gif") as gif:
-        assert gif.n_frames == 7
-        assert gif.info["loop"] == 0
-        durations = []
-        for k in range(gif.n_frames):
-            gif.seek(k)
-            durations.append(gif.info["duration"])
-            decoded = np.asarray(gif.convert("RGB"), dtype=int)
-            with Image.open(tmp_path / "frames" / f"{k:06d}.png") as png:
-                exact = np.asarray(png.convert("RGB"), dtype=int)
-            # One shared palette, no dithering: flat colours survive exactly, edges nearly.
-            assert decoded[0, -1].tolist() == list(load_theme("light").background)
-            assert np.mean(np.all(decoded == exact, axis=2)) > 0.8
-            assert np.abs(decoded - exact).mean() < 1.5
-    assert durations == [30, 40, 30, 30, 40, 30, 30]
-    assert sum(durations) == pytest.approx(7 / scene.fps * 1000, abs=5)
-
-
-def test_gif_durations_add_up_to_the_run():
-    for fps in (24.0, 25.0, 30.0, 29.97, 48.0):
-        durations = export._gif_durations(1000, fps, 1)
-        assert all(d % 10 == 0 and d >= 20 for d in durations)
-        assert sum(durations) == pytest.approx(1000 / fps * 1000, abs=5)
-
-
 def test_fast_runs_keep_every_other_frame_in_the_gif(tmp_path, run):
     scene, snaps = run(12, fps=60.0)
     _export(tmp_path, scene, snaps, frames=False, motion=False)
@@ -80,27 +51,6 @@ def test_fast_runs_keep_every_other_frame_in_the_gif(tmp_path, run):
             gif.seek(k)
             durations.append(gif.info["duration"])
     assert durations == [30, 40, 30, 30, 40, 30]  # 12 frames at 60 fps: 200 ms
-
-
-def test_unchanged_frames_keep_their_time_in_the_gif(tmp_path, run):
-    scene, snaps = run(3)
-    still = [snaps[0]] * 3
-    _export(tmp_path, scene, still, frames=False, motion=False)
-    with Image.open(tmp_path / "run.gif") as gif:
-        assert gif.n_frames == 3
-
-
-def test_apng_frames_match_the_png_frames(tmp_path, run):
-    scene, snaps = run(4)
-    _export(tmp_path, scene, snaps, gif=False, apng=True)
-    with Image.open(tmp_path / "run.png") as apng:
-        assert apng.format == "PNG" and apng.is_animated and apng.n_frames == 4
-        assert apng.info["loop"] == 0
-        for k in range(4):
-            apng.seek(k)
-            assert apng.info["duration"] == pytest.approx(1000 / 30)
-            with Image.open(tmp_path / "frames" / f"{k:06d}.png") as png:
-                assert apng.convert("RGB").tobytes() == png.convert("RGB").tobytes()
 
 
 def test_apng_without_frames_on_disk(tmp_path, run):
@@ -258,10 +208,3 @@ def test_code_from_stdin_exports_serially_or_says_why(tmp_path, run, monkeypatch
     assert export._worker_count(None, len(snaps)) == 1
     with pytest.raises(ValueError, match="workers=1"):
         _export(tmp_path, scene, snaps, workers=2)
-
-
-def test_quantizer_keeps_palette_colours_exact_and_maps_others_to_the_nearest():
-    palette = bytes([10, 20, 30, 200, 200, 200, 11, 20, 30] + [0, 0, 0] * 252)
-    image = Image.new("RGB", (3, 1))
-    image.putdata([(10, 20, 30), (11, 20, 30), (190, 205, 199)])
-    assert list(export._Quantizer(palette).indices(image)) == [0, 2, 1]

@@ -1,17 +1,16 @@
-"""render_snapshot and PillowDrawOptions: pixels land where the camera says, deterministically."""
+"""render_snapshot: pixels land where the camera says, deterministically."""
 
 from __future__ import annotations
 
 import dataclasses
 
 import numpy as np
-import pymunk
 import pytest
 from PIL import Image, ImageDraw
 
 from ikgame.render import pillow
 from ikgame.render.camera import Camera
-from ikgame.render.pillow import PillowDrawOptions, render_snapshot
+from ikgame.render.pillow import render_snapshot
 from ikgame.render.theme import load_theme
 from ikgame.snapshot import PropShape, Scene, Snapshot
 
@@ -192,35 +191,3 @@ def test_upcoming_targets_follow_the_current_one():
     assert len(pillow._upcoming(one_per_step, _one_link(step_index=0))) == 2
     done = _one_link(target=targets[0], step_index=4)
     assert len(pillow._upcoming(scene, done)) == 0
-
-
-def test_pillow_draw_options_draws_a_pymunk_space():
-    space = pymunk.Space()
-    floor = pymunk.Segment(space.static_body, (-80, -30), (80, -30), 5)
-    body = pymunk.Body(1, 100)
-    body.position = (20, 10)
-    ball = pymunk.Circle(body, 12)
-    box = pymunk.Poly.create_box(body, (10, 10))
-    space.add(floor, body, ball, box)
-    image = Image.new("RGB", (200, 100), "white")
-    camera = Camera((200, 100), center=(0.0, 0.0), scale=1.0)
-    options = PillowDrawOptions(image, camera)
-    space.debug_draw(options)
-    white = (255, 255, 255)
-    assert _pixel(image, camera, (0.0, -30.0)) != white  # the floor
-    assert _pixel(image, camera, (20.0 - 8.0, 10.0 + 3.0)) != white  # inside the ball
-    assert _pixel(image, camera, (0.0, 30.0)) == white
-
-
-def test_pillow_draw_options_default_camera_is_y_up_from_the_bottom_left():
-    space = pymunk.Space()
-    space.add(pymunk.Segment(space.static_body, (10, 5), (90, 5), 2))
-    image = Image.new("RGB", (100, 50), "white")
-    space.debug_draw(PillowDrawOptions(image))
-    assert image.getpixel((50, 44)) != (255, 255, 255)  # 5 px above the bottom edge
-    assert image.getpixel((50, 5)) == (255, 255, 255)
-
-
-def test_pillow_draw_options_rejects_a_camera_of_another_size():
-    with pytest.raises(ValueError, match="camera size"):
-        PillowDrawOptions(Image.new("RGB", (10, 10)), Camera((20, 20)))

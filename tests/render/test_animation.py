@@ -1,0 +1,74 @@
+"""GIF and APNG streams: frames, delays, palette and looping, read back by Pillow."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from ikgame.render import animation
+from ikgame.render.export import export_run
+from ikgame.render.theme import load_theme
+
+SIZE = (160, 90)
+
+
+def _export(out, scene, snaps, **kwargs):
+    options = dict(size=SIZE, progress=False, workers=1) | kwargs
+    return export_run(out, scene, snaps, **options)
+
+
+def test_gif_has_every_frame_right_durations_and_loops(tmp_path, run):
+    scene, snaps = run(7)
+    _export(tmp_path, scene, snaps)
+    with Image.open(tmp_path / "run.gif") as gif:
+        assert gif.n_frames == 7
+        assert gif.info["loop"] == 0
+        durations = []
+        for k in range(gif.n_frames):
+            gif.seek(k)
+            durations.append(gif.info["duration"])
+            decoded = np.asarray(gif.convert("RGB"), dtype=int)
+            with Image.open(tmp_path / "frames" / f"{k:06d}.png") as png:
+                exact = np.asarray(png.convert("RGB"), dtype=int)
+            # One shared palette, no dithering: flat colours survive exactly, edges nearly.
+            assert decoded[0, -1].tolist() == list(load_theme("light").background)
+            assert np.mean(np.all(decoded == exact, axis=2)) > 0.8
+            assert np.abs(decoded - exact).mean() < 1.5
+    assert durations == [30, 40, 30, 30, 40, 30, 30]
+    assert sum(durations) == pytest.approx(7 / scene.fps * 1000, abs=5)
+
+
+def test_gif_durations_add_up_to_the_run():
+    for fps in (24.0, 25.0, 30.0, 29.97, 48.0):
+        durations = animation.gif_durations(1000, fps, 1)
+        assert all(d % 10 == 0 and d >= 20 for d in durations)
+        assert sum(durations) == pytest.approx(1000 / fps * 1000, abs=5)
+
+
+def test_unchanged_frames_keep_their_time_in_the_gif(tmp_path, run):
+    scene, snaps = run(3)
+    still = [snaps[0]] * 3
+    _export(tmp_path, scene, still, frames=False, motion=False)
+    with Image.open(tmp_path / "run.gif") as gif:
+        assert gif.n_frames == 3
+
+
+def test_apng_frames_match_the_png_frames(tmp_path, run):
+    scene, snaps = run(4)
+    _export(tmp_path, scene, snaps, gif=False, apng=True)
+    with Image.open(tmp_path / "run.png") as apng:
+        assert apng.format == "PNG" and apng.is_animated and apng.n_frames == 4
+        assert apng.info["loop"] == 0
+        for k in range(4):
+            apng.seek(k)
+            assert apng.info["duration"] == pytest.approx(1000 / 30)
+            with Image.open(tmp_path / "frames" / f"{k:06d}.png") as png:
+                assert apng.convert("RGB").tobytes() == png.convert("RGB").tobytes()
+
+
+def test_quantizer_keeps_palette_colours_exact_and_maps_others_to_the_nearest():
+    palette = bytes([10, 20, 30, 200, 200, 200, 11, 20, 30] + [0, 0, 0] * 252)
+    image = Image.new("RGB", (3, 1))
+    image.putdata([(10, 20, 30), (11, 20, 30), (190, 205, 199)])
+    assert list(animation._Quantizer(palette).indices(image)) == [0, 2, 1]
