@@ -14,11 +14,11 @@ from pathlib import Path
 
 from rich.console import Console
 from rich.markup import escape
-from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
 from rich.table import Table
 
 import ikgame
 from ikgame._files import write_atomic, write_json
+from ikgame._progress import progress_bar
 from ikgame.compare import compare_level, comparison_table, write_comparison
 from ikgame.level.library import DEFAULT_LEVEL, resolve_level
 from ikgame.level.loader import LevelError, Problem, level_theme, load_level
@@ -109,9 +109,7 @@ def _parser() -> argparse.ArgumentParser:
         metavar="LEVEL",
         help=f"a level file, or a shipped level's name (default: {DEFAULT_LEVEL.stem})",
     )
-    run.add_argument(
-        "--out", metavar="DIR", type=Path, help="output folder (default: runs/<level>)"
-    )
+    _output_options(run, "output folder (default: runs/<level>)")
     run.add_argument(
         "--solver",
         choices=SOLVER_NAMES,
@@ -133,9 +131,6 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument(
         "--workers", type=int, metavar="N", help="processes drawing frames (default: automatic)"
     )
-    run.add_argument("--quiet", action="store_true", help="print nothing but errors")
-    run.add_argument("--force", action="store_true", help="write into a non-empty output folder")
-    run.add_argument("--debug", action="store_true", help="show tracebacks of internal errors")
     run.set_defaults(handler=_cmd_run)
 
     compare = sub.add_parser(
@@ -155,10 +150,7 @@ def _parser() -> argparse.ArgumentParser:
         metavar="LIST",
         help=f"comma-separated solvers (default: {','.join(SOLVER_NAMES)})",
     )
-    compare.add_argument("--out", metavar="DIR", type=Path, help="default: runs/<level>-compare")
-    compare.add_argument("--force", action="store_true", help="write into a non-empty folder")
-    compare.add_argument("--quiet", action="store_true", help="print nothing but errors")
-    compare.add_argument("--debug", action="store_true", help="show tracebacks of internal errors")
+    _output_options(compare, "output folder (default: runs/<level>-compare)")
     compare.set_defaults(handler=_cmd_compare)
 
     validate = sub.add_parser(
@@ -192,6 +184,14 @@ def _parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _output_options(parser: argparse.ArgumentParser, out_help: str) -> None:
+    """--out, --force, --quiet and --debug, the same for every command that writes a folder."""
+    parser.add_argument("--out", metavar="DIR", type=Path, help=out_help)
+    parser.add_argument("--force", action="store_true", help="write into a non-empty folder")
+    parser.add_argument("--quiet", action="store_true", help="print nothing but errors")
+    parser.add_argument("--debug", action="store_true", help="show tracebacks of internal errors")
+
+
 def _slug(name: str) -> str:
     return re.sub(r"[^a-z0-9]+", "-", name.lower()).strip("-") or "level"
 
@@ -214,7 +214,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
         raise UsageError(f"--workers: must be at least 1, got {args.workers}")
     console = Console(quiet=args.quiet, highlight=False)
     sim = Simulation(level, solver=args.solver, record=not args.no_frames)
-    with _progress(console, "simulating") as update:
+    with progress_bar("simulating", 1.0, enabled=_interactive(console), console=console) as update:
         result = sim.run(update)
     written = []
     if not args.no_frames:
@@ -228,7 +228,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
             apng=args.apng,
             sheet=args.sheet,
             workers=args.workers,
-            progress=console.is_terminal and not args.quiet,
+            progress=_interactive(console),
         )
     written.append(write_json(out / "results.json", _results(result, level_path, args)))
     _print_summary(console, result, out, written)
@@ -249,7 +249,7 @@ def _cmd_compare(args: argparse.Namespace) -> int:
     with _usage("--out"):
         check_out_dir(out, args.force)
     console = Console(quiet=args.quiet, highlight=False)
-    with _progress(console, "comparing") as update:
+    with progress_bar("comparing", 1.0, enabled=_interactive(console), console=console) as update:
         comparison = compare_level(level, solvers, progress=update)
     written = write_comparison(out, comparison)
     console.print(comparison_table(comparison))
@@ -298,6 +298,10 @@ def _level_theme(level: Level, level_path: Path) -> str | Path | None:
         raise LevelError([Problem(str(level_path), None, "level.theme", str(exc))]) from None
 
 
+def _interactive(console: Console) -> bool:
+    return console.is_terminal and not console.quiet
+
+
 class _usage:
     """Turn a ValueError from checking an option into a UsageError naming the option."""
 
@@ -319,30 +323,6 @@ def _results(result: RunResult, level_path: Path, args: argparse.Namespace) -> d
     options.update({"level_file": level_path.name, "solver_override": args.solver})
     data["options"] = options
     return data
-
-
-class _progress:
-    """A rich progress bar on a terminal; nothing elsewhere. Yields ``update(fraction)``."""
-
-    def __init__(self, console: Console, label: str) -> None:
-        self.enabled = console.is_terminal and not console.quiet
-        self.bar = Progress(
-            TextColumn(f"{label:<11}"),
-            BarColumn(),
-            TextColumn("{task.percentage:>3.0f}%"),
-            TimeRemainingColumn(),
-            console=console,
-            transient=True,
-            disable=not self.enabled,
-        )
-
-    def __enter__(self):
-        self.bar.__enter__()
-        task = self.bar.add_task("", total=1.0)
-        return lambda fraction: self.bar.update(task, completed=fraction)
-
-    def __exit__(self, *exc: object) -> None:
-        self.bar.__exit__(*exc)
 
 
 def _print_summary(console: Console, result: RunResult, out: Path, written: list[Path]) -> None:

@@ -21,7 +21,7 @@ import re
 import sys
 import zlib
 from collections import deque
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Iterator, Sequence
 from concurrent.futures import Future, ProcessPoolExecutor
 from contextlib import ExitStack, contextmanager
 from dataclasses import dataclass
@@ -30,10 +30,9 @@ from typing import Any
 
 import numpy as np
 from PIL import Image, ImageDraw, ImageFont
-from rich.console import Console
-from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 
 from ikgame._files import atomic_open, write_atomic
+from ikgame._progress import progress_bar
 from ikgame.render.animation import ApngWriter, GifWriter, build_palette, gif_durations, quantizer
 from ikgame.render.camera import Camera
 from ikgame.render.pillow import render_snapshot
@@ -390,18 +389,6 @@ def _contact_sheet(job: _Job, indices: Sequence[int]) -> Image.Image:
 # -- files ---------------------------------------------------------------------------------------
 
 
-@contextmanager
-def _progress(enabled: bool, total: int) -> Iterator[Callable[[], None]]:
-    """A rich progress bar on stderr, or a no-op; yields the function that advances it."""
-    if not enabled:
-        yield lambda: None
-        return
-    columns = (TextColumn("rendering"), BarColumn(), MofNCompleteColumn(), TimeRemainingColumn())
-    with Progress(*columns, console=Console(stderr=True)) as bar:
-        task = bar.add_task("frames", total=total)
-        yield lambda: bar.advance(task)
-
-
 def export_run(
     out_dir: str | os.PathLike[str],
     scene: Scene,
@@ -487,7 +474,7 @@ def _write_frames(
         frames_dir.mkdir(exist_ok=True)
     with (
         _pool(job, workers) as pool,
-        _progress(progress, count) as advance,
+        progress_bar("rendering", count, enabled=progress) as update,
         ExitStack() as files,
     ):
         palette = None
@@ -512,7 +499,7 @@ def _write_frames(
             if apng_writer is not None:
                 assert png is not None
                 apng_writer.add(png)
-            advance()
+            update(index + 1)
         # Trailers last, inside the block: the atomic files are renamed into place on its exit.
         if gif_writer is not None:
             gif_writer.close()
