@@ -20,6 +20,8 @@ from typing import Literal
 import numpy as np
 
 from ikgame.control.controller import Controller
+from ikgame.control.dynamics import ChainInertia
+from ikgame.control.servo import Servo
 from ikgame.level.model import (
     BallProp,
     CircleObstacle,
@@ -130,6 +132,17 @@ class Simulation:
     def __init__(self, level: Level, *, solver: str | None = None, record: bool = True) -> None:
         self.level = level
         self.world = World(level)
+        inertia = ChainInertia(
+            np.array([link.length for link in level.chain.expanded_links]),
+            self.world.link_masses,
+            self.world.link_moments,
+        )
+        servo = Servo(
+            inertia,
+            max_torque=self.world.max_torque,
+            max_speed=self.world.max_speed,
+            gain=level.chain.gain,
+        )
         self.controller = Controller(
             self.world.skeleton,
             solver or level.chain.solver,
@@ -137,6 +150,7 @@ class Simulation:
             gain=level.chain.gain,
             iterations=level.chain.iterations,
             arrival=level.chain.arrival,
+            servo=servo,
         )
         self._solver_pinned = solver is not None
         self._start_solver = self.controller.solver_name
@@ -207,8 +221,15 @@ class Simulation:
         if self.script.pending:
             self._apply(self.script.take_changes())
         target = self.target
-        command = self.controller.command(self.world.joint_angles(), target)
-        self.world.set_rates(command.rates)
+        command = self.controller.command(
+            self.world.joint_angles(),
+            target,
+            velocities=self.world.joint_velocities(),
+            gravity=self.world.gravity,
+            dt=self.dt,
+        )
+        drive = command.drive
+        self.world.drive(drive.rates, drive.torques, drive.forces, drive.budgets)
         self.world.step(self.dt)
         self.tick += 1
         if self.world.diverged():
