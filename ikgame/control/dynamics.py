@@ -132,26 +132,6 @@ def _inertia_beyond(chain: ChainInertia, links: np.ndarray, halves: np.ndarray) 
     return _reverse_cumsum(chain.moments) + np.maximum(spread, 0.0)
 
 
-def _mass_rows(chain: ChainInertia, world_angles: np.ndarray, rows: np.ndarray) -> np.ndarray:
-    """Rows ``rows`` of the joint-space mass matrix M (joint torques = M @ accelerations + bias).
-
-    ``M[i, j]`` sums, over the links beyond both joints, each link's moment about its centre plus
-    its mass times the dot product of its centre's offsets from the two joints.
-    """
-    directions = np.stack((np.cos(world_angles), np.sin(world_angles)), axis=-1)
-    links = chain.lengths[:, None] * directions
-    joints = np.concatenate((np.zeros((1, 2)), np.cumsum(links, axis=0)[:-1]))
-    centres = joints + 0.5 * links
-    m = chain.masses
-    own = _reverse_cumsum(chain.moments + m * np.einsum("ij,ij->i", centres, centres))
-    first = _reverse_cumsum(m[:, None] * centres)
-    mass = _reverse_cumsum(m)
-    beyond = np.maximum.outer(rows, np.arange(chain.count))
-    by_row = np.einsum("ijk,ik->ij", first[beyond], joints[rows])
-    by_column = np.einsum("ijk,jk->ij", first[beyond], joints)
-    return own[beyond] - by_row - by_column + mass[beyond] * (joints[rows] @ joints.T)
-
-
 @dataclass(frozen=True, eq=False)
 class Drive:
     """A motion the motors can deliver this instant, and the loads that deliver it.
@@ -219,41 +199,8 @@ def plan_drive(
             full.inertia,
         )
     else:
-        accelerations, loads = _saturate(chain, world_angles, omega, wanted, gravity, limit, bias)
+        accelerations = wanted
+        loads = JointLoads(np.clip(bias.torques, -limit, limit), bias.forces, bias.inertia)
     saturated = np.abs(loads.torques) >= limit * (1.0 - 1e-9)
     return Drive(accelerations, loads, saturated)
 
-
-def _saturate(
-    chain: ChainInertia,
-    world_angles: np.ndarray,
-    omega: np.ndarray,
-    wanted: np.ndarray,
-    gravity: tuple[float, float] | np.ndarray,
-    limit: np.ndarray,
-    bias: JointLoads,
-) -> tuple[np.ndarray, JointLoads]:
-    """Joints over their limit push at it; the others keep their wanted accelerations.
-
-    Which joints saturate depends on what the others do, so they are found a round at a time
-    (an active set): the accelerations of the saturated joints follow from their rows of the
-    mass matrix. Clipping every torque on its own instead would drive the light far end of a
-    long chain with torques meant for a motion its base cannot follow, and fling it about.
-    """
-    accelerations = np.array(wanted, dtype=float)
-    loads = inverse_dynamics(chain, world_angles, omega, np.cumsum(accelerations), gravity)
-    saturated = np.zeros(chain.count, dtype=bool)
-    pushes = np.zeros(chain.count)
-    for _ in range(chain.count):
-        over = (np.abs(loads.torques) > limit * (1.0 + 1e-9)) & ~saturated
-        if not np.any(over):
-            break
-        saturated |= over
-        pushes[over] = np.sign(loads.torques[over]) * limit[over]
-        rows = np.flatnonzero(saturated)
-        block = _mass_rows(chain, world_angles, rows)
-        free = ~saturated
-        rhs = pushes[rows] - bias.torques[rows] - block[:, free] @ accelerations[free]
-        accelerations[rows] = np.linalg.solve(block[:, rows], rhs)
-        loads = inverse_dynamics(chain, world_angles, omega, np.cumsum(accelerations), gravity)
-    return accelerations, loads

@@ -114,30 +114,35 @@ class Servo:
         # there; it asks only to stop until its goal moves, so it comes to rest where its
         # torque runs out instead of swinging about that point like a pendulum.
         away = self._saturated & (velocities * error < 0.0)
-        self._stalled_at = np.where(away & ~self._stalled, error, self._stalled_at)
-        self._stalled = (self._stalled | away) & (np.abs(error - self._stalled_at) <= GOAL_MOVED)
+        # The goal angle, up to the base's constant mount angle: the error alone also grows as
+        # the joint is carried away, which is not the goal moving.
+        goal = np.diff(world_angles, prepend=0.0) + error
+        self._stalled_at = np.where(away & ~self._stalled, goal, self._stalled_at)
+        self._stalled = (self._stalled | away) & (np.abs(goal - self._stalled_at) <= GOAL_MOVED)
         size = np.where(self._stalled, 0.0, np.abs(error))
         speed = np.minimum(
             np.minimum(self.max_speed, self.gain * size), np.sqrt(2.0 * brake * size)
         )
-        wanted = np.sign(error) * speed
+        target = np.sign(error) * speed
         if goal_rates is not None:
-            wanted = wanted + goal_rates
-        wanted = np.clip(wanted, velocities - reach * dt, velocities + reach * dt)
-        wanted = np.clip(wanted, -self.max_speed, self.max_speed)
+            target = target + goal_rates
+        target = np.clip(target, -self.max_speed, self.max_speed)
         # Joints of a long chain moving at once whip its far end round: the torques that merely
         # keep those velocities grow with their square. Slow every joint by one factor until
         # they fit in the share of spare torque that braking leaves.
-        spin = inverse_dynamics(self.inertia, world_angles, np.cumsum(wanted), still, (0.0, 0.0))
+        spin = inverse_dynamics(self.inertia, world_angles, np.cumsum(target), still, (0.0, 0.0))
         need = np.abs(spin.torques)
         room = (1.0 - BRAKE_SHARE) * spare
         over = need > room
         if np.any(over):
-            wanted = wanted * math.sqrt(float(np.min(room[over] / need[over])))
+            target = target * math.sqrt(float(np.min(room[over] / need[over])))
+        # Approach that velocity no faster than each joint's spare torque allows: a servo that
+        # asked for the whole change in one tick would saturate every motor after any knock.
+        wanted = np.clip(target, velocities - reach * dt, velocities + reach * dt)
         drive = plan_drive(
             self.inertia,
             world_angles,
-            omega,
+            still,
             (wanted - velocities) / dt,
             gravity,
             self.max_torque,
