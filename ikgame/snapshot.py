@@ -79,7 +79,9 @@ class Snapshot:
         target: (2,) the current target, or None when the script has none.
         step_index: index of the running script step (== step_count once the script is done).
         error: distance from the end effector to the target, px (nan without a target).
-        solver_status: the solver's state this tick: ``"success"``, ``"processing"``, ``"failure"``.
+        solver_status: the solver's state this tick: ``"success"``, ``"processing"``,
+            ``"failure"``, or ``"blocked"`` (the chain makes no progress toward a target the
+            solver reaches, so it holds its pose).
         torque_limited: (n,) which motors are at their torque limit.
         props: (p, 3) each prop's ``(x, y, angle)``.
     """

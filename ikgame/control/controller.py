@@ -89,6 +89,7 @@ class Controller:
         self.arrival = float(arrival)
         self._limited = skeleton.limited
         self._held: np.ndarray | None = None
+        self._holding = False
         self._last_target: np.ndarray | None = None
 
     @property
@@ -134,6 +135,22 @@ class Controller:
             return None
         return rates / max(over, 1.0)
 
+    def hold(self, measured: np.ndarray) -> None:
+        """Stop pushing: hold the ``measured`` pose (radians) instead of solving, until
+        :meth:`release`. The response to a blocked chain: pressing on against an obstacle or a
+        stalled motor only grinds."""
+        self._held = self.skeleton.clamp(np.asarray(measured, dtype=float).copy())
+        self._holding = True
+
+    def release(self) -> None:
+        """Solve toward the target again after :meth:`hold`."""
+        self._holding = False
+
+    @property
+    def holding(self) -> bool:
+        """True between :meth:`hold` and :meth:`release`."""
+        return self._holding
+
     def command(
         self,
         measured: np.ndarray,
@@ -149,7 +166,7 @@ class Controller:
         ``dt`` (s) are needed too. With no target the chain holds the last pose it was asked
         for (or its current one).
         """
-        if target is None:
+        if target is None or self._holding:
             if self._held is None:
                 self._held = self.skeleton.clamp(measured.copy())
             solution = Solution(self._held, SolveStatus.SUCCESS, 0, 0.0)

@@ -203,4 +203,3 @@ def plan_drive(
         loads = JointLoads(np.clip(bias.torques, -limit, limit), bias.forces, bias.inertia)
     saturated = np.abs(loads.torques) >= limit * (1.0 - 1e-9)
     return Drive(accelerations, loads, saturated)
-

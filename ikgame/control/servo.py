@@ -87,6 +87,7 @@ class Servo:
         self._stalled = np.zeros(count, dtype=bool)
         self._stalled_at = np.zeros(count)
         self._saturated = np.zeros(count, dtype=bool)
+        self._velocities = np.zeros(count)
 
     def command(
         self,
@@ -113,7 +114,14 @@ class Servo:
         # Anti-windup: a joint pushing at its limit yet carried away from its goal cannot get
         # there; it asks only to stop until its goal moves, so it comes to rest where its
         # torque runs out instead of swinging about that point like a pendulum.
-        away = self._saturated & (velocities * error < 0.0)
+        # Carried away: moving from the goal, faster than a tick ago, while pushing at the limit.
+        # An overshoot that the motor is braking slows down instead, and is no stall.
+        away = (
+            self._saturated
+            & (velocities * error < 0.0)
+            & (np.abs(velocities) > np.abs(self._velocities))
+        )
+        self._velocities = velocities
         # The goal angle, up to the base's constant mount angle: the error alone also grows as
         # the joint is carried away, which is not the goal moving.
         goal = np.diff(world_angles, prepend=0.0) + error

@@ -260,6 +260,15 @@ class World:
         """(n,) bool: which joints were at their torque limit during the last step."""
         return self.motor_torques() >= self.max_torque * (1.0 - 1e-6)
 
+    def touching(self) -> bool:
+        """True when any link of the chain is in contact with an obstacle or a prop."""
+        for body in self.bodies:
+            contacts: list[object] = []
+            body.each_arbiter(contacts.append)
+            if contacts:
+                return True
+        return False
+
     def set_gravity(self, gravity: tuple[float, float]) -> None:
         """Change gravity from now on, px/s^2."""
         self.space.gravity = gravity

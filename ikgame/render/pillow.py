@@ -480,7 +480,7 @@ def _font(size: int) -> ImageFont.FreeTypeFont | ImageFont.ImageFont:
 
 def _hud_lines(scene: Scene, snapshot: Snapshot, theme: Theme) -> list[list[tuple[str, RGB]]]:
     """The HUD's text as lines of (text, colour) runs."""
-    status_colors = {"success": theme.success, "failure": theme.failure}
+    status_colors = {"success": theme.success, "failure": theme.failure, "blocked": theme.failure}
     stats: list[tuple[str, RGB]] = [(f"t {snapshot.time:.2f} s", theme.hud_text)]
     if scene.step_count:
         if snapshot.step_index >= scene.step_count:
