@@ -327,11 +327,20 @@ def _summarise(
     )
 
 
-def _cell(text: str, ok: bool | None) -> str:
-    """A table cell marked against its threshold: a cross (and red) when it fails."""
-    if ok is None:
-        return text
-    return f"[green]{text}[/]" if ok else f"[red]{text} x[/]"
+_COLUMNS: Final = (
+    ("level", "left"),
+    ("solver", "left"),
+    ("reached", "right"),
+    ("t reach s", "right"),
+    ("overshoot %", "right"),
+    ("jitter px", "right"),
+    ("limit deg", "right"),
+    ("spins", "right"),
+    ("sat %", "right"),
+    ("states", "left"),
+    ("fail/jam", "right"),
+    ("run", "left"),
+)
 
 
 def _number(value: float | None, fmt: str) -> str:
@@ -342,61 +351,82 @@ def _states(states: dict[str, int]) -> str:
     return " ".join(f"{n}{_STATE_LETTERS.get(name, name)}" for name, n in states.items())
 
 
-def render(reports: list[RunReport], console: Console, *, tick_rate: int | None) -> None:
-    """Print the table of stress level x solver and the pass counts."""
-    rate = "the levels' own tick rate" if tick_rate is None else f"{tick_rate} ticks/s"
-    table = Table(title=f"Motion quality in the physics world ({rate})", title_justify="left")
-    for name, justify in (
-        ("level", "left"),
-        ("solver", "left"),
-        ("reached", "right"),
-        ("t reach s", "right"),
-        ("overshoot %", "right"),
-        ("jitter px", "right"),
-        ("limit deg", "right"),
-        ("spins", "right"),
-        ("sat %", "right"),
-        ("states", "left"),
-        ("fail/jam", "right"),
-        ("run", "left"),
-        ("wall s", "right"),
-    ):
-        table.add_column(name, justify=justify, no_wrap=True)
+def table_rows(reports: list[RunReport]) -> list[list[tuple[str, bool | None]]]:
+    """Each run as the cells of the table: (text, passes its threshold or None if not judged)."""
+    rows = []
     previous = None
     for r in reports:
         c = r.checks
-        table.add_row(
-            "" if r.level == previous else Path(r.level).stem,
-            r.solver,
-            _cell(f"{r.reached}/{r.reachable}", c["reached"]),
-            _number(r.mean_time_to_reach, ".2f"),
-            _cell(_number(r.overshoot_pct, ".1f"), c["overshoot"]),
-            _cell(_number(r.jitter_px, ".2f"), c["jitter"]),
-            _cell(f"{r.limit_excursion_deg:.1f}", c["limits"]),
-            _cell(str(r.spins), c["spins"]),
-            f"{100.0 * r.saturated_share:.0f}",
-            _cell(_states(r.states), c["states"]),
-            _cell(f"{r.special_met}/{r.special_total}", c["expect"]) if r.special_total else "-",
-            _cell("pass" if r.passed else "FAIL", r.passed),
-            f"{r.wall_s:.1f}",
-            end_section=False,
+        special = (f"{r.special_met}/{r.special_total}", c["expect"]) if r.special_total else None
+        rows.append(
+            [
+                ("" if r.level == previous else Path(r.level).stem, None),
+                (r.solver, None),
+                (f"{r.reached}/{r.reachable}", c["reached"]),
+                (_number(r.mean_time_to_reach, ".2f"), None),
+                (_number(r.overshoot_pct, ".1f"), c["overshoot"]),
+                (_number(r.jitter_px, ".2f"), c["jitter"]),
+                (f"{r.limit_excursion_deg:.1f}", c["limits"]),
+                (str(r.spins), c["spins"]),
+                (f"{100.0 * r.saturated_share:.0f}", None),
+                (_states(r.states), c["states"]),
+                special or ("-", None),
+                ("pass" if r.passed else "FAIL", r.passed),
+            ]
         )
         previous = r.level
-    console.print(table)
+    return rows
+
+
+def summary(reports: list[RunReport]) -> str:
+    """The pass counts of a set of runs."""
     runs = sum(r.passed for r in reports)
-    cells = sum(sum(r.checks.values()) for r in reports)
-    total_cells = sum(len(r.checks) for r in reports)
-    console.print(
-        f"runs passing: {runs}/{len(reports)}   checks passing: {cells}/{total_cells}   "
-        f"targets reached: {sum(r.reached for r in reports)}/{sum(r.reachable for r in reports)}"
+    checks = sum(sum(r.checks.values()) for r in reports)
+    total = sum(len(r.checks) for r in reports)
+    reached = sum(r.reached for r in reports)
+    return (
+        f"runs passing: {runs}/{len(reports)}   checks passing: {checks}/{total}   "
+        f"targets reached: {reached}/{sum(r.reachable for r in reports)}"
     )
-    console.print(
-        "states: the solver state each step ended in (s success, p processing, f failure, "
-        "b blocked); fail/jam: unreachable or jammed steps that ended as they should; "
-        f"thresholds: overshoot <= {OVERSHOOT_PCT:g}%, jitter <= {JITTER_PX:g} px "
-        f"(< {SATURATED_JITTER_PX:g} px torque-bound or jammed), limit <= {LIMIT_DEG:g} deg, "
-        "no spin, no unreached step ending in success"
-    )
+
+
+LEGEND: Final = (
+    "states: the solver state each step ended in (s success, p processing, f failure, "
+    "b blocked); fail/jam: unreachable or jammed steps that ended as they should; x: fails "
+    f"its threshold (overshoot <= {OVERSHOOT_PCT:g}%, jitter <= {JITTER_PX:g} px, "
+    f"< {SATURATED_JITTER_PX:g} px torque-bound or jammed, limit <= {LIMIT_DEG:g} deg, "
+    "no spin, no unreached step ending in success)"
+)
+
+
+def render(reports: list[RunReport], console: Console, *, tick_rate: int | None) -> None:
+    """Print the table of stress level x solver, with each run's wall time, and the counts."""
+    rate = "the levels' own tick rate" if tick_rate is None else f"{tick_rate} ticks/s"
+    table = Table(title=f"Motion quality in the physics world ({rate})", title_justify="left")
+    for name, justify in (*_COLUMNS, ("wall s", "right")):
+        table.add_column(name, justify=justify, no_wrap=True)
+    for report, row in zip(reports, table_rows(reports), strict=True):
+        cells = [
+            text if ok is None else f"[green]{text}[/]" if ok else f"[red]{text} x[/]"
+            for text, ok in row
+        ]
+        table.add_row(*cells, f"{report.wall_s:.1f}")
+    console.print(table)
+    console.print(summary(reports))
+    console.print(LEGEND)
+
+
+def markdown(reports: list[RunReport]) -> str:
+    """The table as Markdown, without wall times, so it is the same on every run."""
+    align = {"left": ":---", "right": "---:"}
+    lines = [
+        "| " + " | ".join(name for name, _ in _COLUMNS) + " |",
+        "|" + "|".join(align[justify] for _, justify in _COLUMNS) + "|",
+    ]
+    for row in table_rows(reports):
+        cells = [text if ok is not False else f"{text} x" for text, ok in row]
+        lines.append("| " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n\n" + summary(reports) + "\n\n" + LEGEND + "\n"
 
 
 def _job(args: tuple[str, str, int | None]) -> RunReport:
@@ -425,6 +455,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--quick", action="store_true", help="a subset of six levels")
     parser.add_argument("--jobs", type=int, default=1, help="runs in parallel (processes)")
     parser.add_argument("--json", type=Path, metavar="OUT", help="write every measure here")
+    parser.add_argument("--markdown", type=Path, metavar="OUT", help="write the table as Markdown")
     args = parser.parse_args(argv)
     paths = _pick_levels(args.levels, args.quick)
     jobs = [(str(p), s, args.tick_rate) for p in paths for s in args.solvers]
@@ -448,6 +479,8 @@ def main(argv: list[str] | None = None) -> int:
             "runs": [asdict(r) | {"passed": r.passed} for r in reports],
         }
         args.json.write_text(json.dumps(data, indent=1) + "\n")
+    if args.markdown is not None:
+        args.markdown.write_text(markdown(reports))
     return 0
 
 
