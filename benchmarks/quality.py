@@ -33,6 +33,7 @@ from _quality_metrics import (
     spin_joints,
     stretched_toward,
 )
+from pydantic import ValidationError
 from rich.console import Console
 from rich.table import Table
 
@@ -434,17 +435,15 @@ def _job(args: tuple[str, str, int | None]) -> RunReport:
     return run_one(Path(path), solver, tick_rate)
 
 
-def _pick_levels(names: list[str] | None, quick: bool) -> list[Path]:
+def _pick_levels(names: list[str] | None, quick: bool) -> tuple[list[Path], list[str]]:
+    """The stress levels asked for (each name a part of a file name), and names matching none."""
     paths = stress_levels()
     if quick:
         paths = [p for p in paths if p.name in QUICK]
-    if names:
-        chosen = [p for p in paths if any(n in p.name for n in names)]
-        missing = [n for n in names if not any(n in p.name for p in paths)]
-        if missing:
-            raise SystemExit(f"quality.py: no stress level matches {', '.join(missing)}")
-        paths = chosen
-    return paths
+    if not names:
+        return paths, []
+    missing = [n for n in names if not any(n in p.name for p in paths)]
+    return [p for p in paths if any(n in p.name for n in names)], missing
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -457,7 +456,14 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--json", type=Path, metavar="OUT", help="write every measure here")
     parser.add_argument("--markdown", type=Path, metavar="OUT", help="write the table as Markdown")
     args = parser.parse_args(argv)
-    paths = _pick_levels(args.levels, args.quick)
+    paths, missing = _pick_levels(args.levels, args.quick)
+    if missing:
+        parser.error(f"no stress level matches {', '.join(missing)} (see {STRESS_DIR})")
+    for path in paths:
+        try:
+            load(path, args.tick_rate)
+        except ValidationError as exc:
+            parser.error(f"{path.name} at --tick-rate {args.tick_rate}: {exc.errors()[0]['msg']}")
     jobs = [(str(p), s, args.tick_rate) for p in paths for s in args.solvers]
     started = time.perf_counter()
     err = Console(stderr=True)
