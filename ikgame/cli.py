@@ -27,6 +27,7 @@ from ikgame.level.tools import level_rows, schema_text, validate_files
 from ikgame.render.export import check_out_dir, export_run, parse_size
 from ikgame.render.theme import available_themes, load_theme
 from ikgame.sim import RunResult, Simulation
+from ikgame.skins import skin_scene
 
 __all__ = ["main"]
 
@@ -214,13 +215,15 @@ def _cmd_run(args: argparse.Namespace) -> int:
         raise UsageError(f"--workers: must be at least 1, got {args.workers}")
     console = Console(quiet=args.quiet, highlight=False)
     sim = Simulation(level, solver=args.solver, record=not args.no_frames)
+    # Sprites are decoded before the run, so an image that cannot be used stops it at once.
+    scene = sim.scene if args.no_frames else skin_scene(sim.scene, level, level_path)
     with progress_bar("simulating", 1.0, enabled=_interactive(console), console=console) as update:
         result = sim.run(update)
     written = []
     if not args.no_frames:
         written = export_run(
             out,
-            sim.scene,
+            scene,
             sim.snapshots,
             size=size,
             theme=theme,
