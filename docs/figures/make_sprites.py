@@ -66,25 +66,14 @@ def claw(name: str = "claw.png") -> None:
     width, height = 160, 96
     image, draw = _canvas(width, height)
     s, cy = SS, height / 2
+    finger = [(70, 6), (112, 30), (140, 22), (128, 12), (106, 16), (86, 4)]  # (x, out from cy)
     for sign in (-1, 1):
-        finger = [
-            (70, cy + sign * 6),
-            (112, cy + sign * 30),
-            (140, cy + sign * 22),
-            (128, cy + sign * 12),
-            (106, cy + sign * 16),
-            (86, cy + sign * 4),
-        ]
-        draw.polygon([(x * s, y * s) for x, y in finger], fill=INK)
-        inner = [
-            (76, cy + sign * 8),
-            (112, cy + sign * 26),
-            (134, cy + sign * 21),
-            (126, cy + sign * 15),
-            (106, cy + sign * 20),
-            (86, cy + sign * 8),
-        ]
-        draw.polygon([(x * s, y * s) for x, y in inner], fill=STEEL)
+        outer = [(x, cy + sign * dy) for x, dy in finger]
+        draw.polygon([(x * s, y * s) for x, y in outer], fill=INK)
+        # The steel face: the same finger shrunk toward its middle, leaving an ink rim.
+        mx, my = sum(x for x, _ in outer) / 6, sum(y for _, y in outer) / 6
+        face = [(mx + (x - mx) * 0.78, my + (y - my) * 0.62) for x, y in outer]
+        draw.polygon([(x * s, y * s) for x, y in face], fill=STEEL)
     draw.rounded_rectangle((6 * s, (cy - 20) * s, 92 * s, (cy + 20) * s), radius=20 * s, fill=INK)
     draw.rounded_rectangle(
         (10 * s, (cy - 16) * s, 88 * s, (cy + 16) * s), radius=16 * s, fill=(232, 84, 72, 255)

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import math
 import re
-from typing import Annotated, Final, Literal, get_args
+from typing import Annotated, Any, Final, Literal, get_args
 
 from pydantic import (
     AfterValidator,
@@ -204,6 +204,29 @@ def _png_inside(value: str) -> str:
 SpritePath = Annotated[str, Field(min_length=1, max_length=200), AfterValidator(_png_inside)]
 
 
+# The sprite fields of links and props differ only in words and the pivot's default.
+def _sprite_field(replaces: str, orientation: str) -> Any:
+    return Field(
+        None,
+        description=f"A PNG image drawn in place of {replaces} (a file in the level's folder or "
+        f"assets/); {orientation}.",
+    )
+
+
+def _pivot_field(default: tuple[float, float], onto: str) -> Any:
+    return Field(
+        default,
+        description=f"The image point that sits on {onto}, as fractions of the image's width "
+        "and height from its top-left corner.",
+    )
+
+
+def _scale_field(spans: str) -> Any:
+    return Field(
+        None, description=f"World px per image px; default: the image's width spans {spans}."
+    )
+
+
 class WorldConfig(_Model):
     """[world]: gravity, damping and the fixed clocks of the run."""
 
@@ -257,20 +280,11 @@ class LinkConfig(_Model):
         360.0, gt=0, le=36000, allow_inf_nan=False, description="Motor speed limit, deg/s."
     )
     repeat: int = Field(1, ge=1, le=MAX_LINKS, description="Use this link this many times.")
-    sprite: SpritePath | None = Field(
-        None,
-        description="A PNG image drawn in place of the link's capsule (a file in the level's "
-        "folder or assets/); the image's +x axis points along the link.",
+    sprite: SpritePath | None = _sprite_field(
+        "the link's capsule", "the image's +x axis points along the link"
     )
-    sprite_pivot: tuple[Fraction, Fraction] = Field(
-        (0.0, 0.5),
-        description="The image point that sits on the link's joint, as fractions of the image's "
-        "width and height from its top-left corner.",
-    )
-    sprite_scale: SpriteScale | None = Field(
-        None,
-        description="World px per image px; default: the image's width spans the link's length.",
-    )
+    sprite_pivot: tuple[Fraction, Fraction] = _pivot_field((0.0, 0.5), "the link's joint")
+    sprite_scale: SpriteScale | None = _scale_field("the link's length")
 
     @model_validator(mode="after")
     def _limits_ordered(self) -> LinkConfig:
@@ -360,21 +374,11 @@ class _Prop(_Model):
         description="Bounce off obstacles, 0 (none) to 1 (full); two props bounce with the "
         "product of theirs; links never bounce.",
     )
-    sprite: SpritePath | None = Field(
-        None,
-        description="A PNG image drawn in place of the prop's shape (a file in the level's "
-        "folder or assets/), upright at angle 0 and turning with the prop.",
+    sprite: SpritePath | None = _sprite_field(
+        "the prop's shape", "upright at angle 0, it turns with the prop"
     )
-    sprite_pivot: tuple[Fraction, Fraction] = Field(
-        (0.5, 0.5),
-        description="The image point that sits on the prop's centre, as fractions of the image's "
-        "width and height from its top-left corner.",
-    )
-    sprite_scale: SpriteScale | None = Field(
-        None,
-        description="World px per image px; default: the image's width spans the ball's "
-        "diameter or the box's width.",
-    )
+    sprite_pivot: tuple[Fraction, Fraction] = _pivot_field((0.5, 0.5), "the prop's centre")
+    sprite_scale: SpriteScale | None = _scale_field("the ball's diameter or the box's width")
 
     @model_validator(mode="after")
     def _sprite_given(self) -> _Prop:
