@@ -5,6 +5,8 @@ Pillow's primitives are not anti-aliased, and averaging many sub-pixels is the c
 get smooth edges. The static scene (background, grid, goals, obstacles) is drawn and shrunk once
 per run; each frame redraws and shrinks only the rectangle its moving parts cover, which makes
 a frame about three times cheaper. The HUD is drawn after the shrink so its text stays crisp.
+Links and props that carry a sprite are drawn as their images instead of their shapes
+(:func:`_draw_sprites`, with :mod:`ikgame.render.sprites`), over the shapes, under the crosshair.
 Translucent layers (goals, trail, faded targets) are blended with the background colour by hand
 instead of alpha compositing a full-size layer, which would cost as much as the rest of a frame.
 
