@@ -221,14 +221,20 @@ def _sprite_problems(level: Level, level_file: Path, text: str) -> list[Problem]
         return []
     tables = _tables(text)
     problems = []
-    sizes: dict[Path, int] = {}
+    # Each file is read once, however many links name it: a level may name 300 sprites.
+    checked: dict[str, tuple[Path, int] | str] = {}
     for loc, name in fields:
-        try:
-            path, (width, height) = sprite_file(name, level_file)
-            sizes[path] = width * height
-        except ValueError as exc:
+        if name not in checked:
+            try:
+                path, (width, height) = sprite_file(name, level_file)
+                checked[name] = (path, width * height)
+            except ValueError as exc:
+                checked[name] = str(exc)
+        result = checked[name]
+        if isinstance(result, str):
             where = _locate(text, tables, loc)
-            problems.append(Problem(str(level_file), where, _field_path(loc), str(exc)))
+            problems.append(Problem(str(level_file), where, _field_path(loc), result))
+    sizes = dict(r for r in checked.values() if not isinstance(r, str))
     if not problems and sum(sizes.values()) > MAX_SPRITE_TOTAL_PIXELS:
         loc = fields[-1][0]
         problems.append(

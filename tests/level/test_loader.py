@@ -325,3 +325,13 @@ def test_sprite_pivot_and_scale_need_a_sprite():
     assert _problems(text) == [
         "t.toml:14: props[0].sprite_pivot[1]: Input should be less than or equal to 1 (got 2.0)"
     ]
+
+
+def test_a_missing_sprite_named_twice_is_reported_at_both_lines(tmp_path):
+    level_file = tmp_path / "lvl.toml"
+    level_file.write_text(
+        SKINNED.replace(
+            "[[script]]", '[[chain.links]]\nlength = 20.0\nsprite = "arm.png"\n[[script]]'
+        )
+    )
+    assert [p.split(": ")[0] for p in _load_problems(level_file)] == ["lvl.toml:7", "lvl.toml:10"]
