@@ -26,7 +26,9 @@ from ikgame.level.model import SOLVER_NAMES, Level
 from ikgame.level.tools import level_rows, schema_text, validate_files
 from ikgame.render.export import check_out_dir, export_run, parse_size
 from ikgame.render.theme import available_themes, load_theme
+from ikgame.render.video import check_video
 from ikgame.sim import RunResult, Simulation
+from ikgame.skins import skin_scene
 
 __all__ = ["main"]
 
@@ -52,6 +54,7 @@ writes into DIR:
   run.gif        the whole run, looping
   motion.json    baked motion: per frame every joint's angle and position, for a game engine
   run.png        an animated PNG (with --apng)     sheet.png  a contact sheet (with --sheet)
+  run.mp4        H.264 video at the level's fps (with --mp4; needs: pip install 'ikgame[video]')
 exit codes: 0 the run completed (whatever its status), 2 bad input, 1 internal error.
 """
 
@@ -119,6 +122,12 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--no-gif", action="store_true", help="skip run.gif")
     run.add_argument("--apng", action="store_true", help="also write run.png, an animated PNG")
     run.add_argument("--sheet", action="store_true", help="also write sheet.png, a contact sheet")
+    run.add_argument(
+        "--mp4",
+        action="store_true",
+        help="also write run.mp4 (H.264, yuv420p; an odd side loses one pixel); needs the video "
+        "extra",
+    )
     run.add_argument(
         "--size", default="960x540", metavar="WxH", help="frame size in pixels (default: 960x540)"
     )
@@ -212,21 +221,29 @@ def _cmd_run(args: argparse.Namespace) -> int:
         theme = load_theme(_level_theme(level, level_path) or "light")
     if args.workers is not None and args.workers < 1:
         raise UsageError(f"--workers: must be at least 1, got {args.workers}")
+    if args.mp4:
+        if args.no_frames:
+            raise UsageError("--mp4: there are no pictures to encode with --no-frames")
+        with _usage("--mp4"):
+            check_video()
     console = Console(quiet=args.quiet, highlight=False)
     sim = Simulation(level, solver=args.solver, record=not args.no_frames)
+    # Sprites are decoded before the run, so an image that cannot be used stops it at once.
+    scene = sim.scene if args.no_frames else skin_scene(sim.scene, level, level_path)
     with progress_bar("simulating", 1.0, enabled=_interactive(console), console=console) as update:
         result = sim.run(update)
     written = []
     if not args.no_frames:
         written = export_run(
             out,
-            sim.scene,
+            scene,
             sim.snapshots,
             size=size,
             theme=theme,
             gif=not args.no_gif,
             apng=args.apng,
             sheet=args.sheet,
+            mp4=args.mp4,
             workers=args.workers,
             progress=_interactive(console),
         )
