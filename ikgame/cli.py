@@ -463,6 +463,9 @@ def _cmd_play(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+EXIT_INTERRUPTED = 130  # what main returns on Ctrl-C
+
+
 def _cmd_watch(
     args: argparse.Namespace,
     *,
@@ -491,20 +494,23 @@ def _cmd_watch(
         forced = forced or code == EXIT_OK
         return code
 
-    code = run()
-    if code != EXIT_OK and not validate_files([level_path]):
-        return code  # the options are wrong, not the level: no edit to it can help
     console = Console(quiet=args.quiet, highlight=False)
 
     def again() -> None:
         console.print(f"\n[bold]{escape(level_path.name)}[/] changed: running it again")
-        if run() == 130:
+        if run() == EXIT_INTERRUPTED:
             raise KeyboardInterrupt
 
-    names = ", ".join(escape(str(path)) for path in sorted(level_files(level_path)))
-    console.print(f"watching {names} for changes (Ctrl-C stops)")
     try:
+        code = run()
+        if code == EXIT_INTERRUPTED:
+            raise KeyboardInterrupt
+        if code != EXIT_OK and not validate_files([level_path]):
+            return code  # the options are wrong, not the level: no edit to it can help
+        names = ", ".join(escape(str(path)) for path in sorted(level_files(level_path)))
+        console.print(f"watching {names} for changes (Ctrl-C stops)")
         watch_level(level_path, again, stop=stop, ready=ready)
     except KeyboardInterrupt:
+        # Every file is written atomically: what is on disk now is whole.
         console.print("stopped watching")
     return EXIT_OK
