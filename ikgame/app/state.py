@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import math
 from collections import deque
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import lru_cache
 from pathlib import Path
 from typing import Final
@@ -35,7 +35,7 @@ from ikgame.render.camera import Camera
 from ikgame.render.export import TRAIL_SECONDS
 from ikgame.render.pillow import render_snapshot
 from ikgame.render.theme import Theme, load_theme
-from ikgame.sim import Simulation
+from ikgame.sim import RunResult, Simulation
 
 __all__ = [
     "BINDINGS",
@@ -185,6 +185,10 @@ class PlayState:
         self._trail.append(self.sim.world.end_effector())
         self._backlog = 0.0
         self._pending_steps = 0
+        # Ticks after the run ended, and the telemetry of the latest of them.
+        self._extra_ticks = 0
+        self._extra: tuple[str, float, np.ndarray] | None = None
+        self.result: RunResult | None = None  # once the run is over
         if self.held is not None:
             self.sim.target = self.held
 
@@ -251,7 +255,7 @@ class PlayState:
             self._backlog -= ticks * self.sim.dt
         ran = 0
         for _ in range(ticks):
-            if self.sim.done:
+            if self.sim.diverged:
                 break
             self._tick()
             ran += 1
@@ -259,15 +263,41 @@ class PlayState:
 
     def _tick(self) -> None:
         sim = self.sim
-        sim.step()
+        if sim.done:
+            self._play_on()
+        else:
+            sim.step()
         if not self.gravity_on and tuple(sim.world.space.gravity) != (0.0, 0.0):
             # A level's `set` step changed gravity while it was switched off: that is the
             # gravity to come back to.
             self._gravity = tuple(sim.world.space.gravity)
             sim.world.set_gravity((0.0, 0.0))
+        ticks = sim.tick + self._extra_ticks
         fps, rate = self.level.world.fps, self.level.world.tick_rate
-        if sim.tick * fps // rate != (sim.tick - 1) * fps // rate:
+        if ticks * fps // rate != (ticks - 1) * fps // rate:
             self._trail.append(sim.world.end_effector())
+
+    def _play_on(self) -> None:
+        """A tick after the run is over: its result stays as it ended, while the chain keeps
+        following the target (the mouse, or the script's last point) for as long as the player
+        likes."""
+        sim = self.sim
+        if self._extra_ticks == 0:
+            # Judged now, before the player moves anything; the simulation keeps it from here.
+            self.result = sim.result
+        command = sim.controller.command(sim.world.joint_angles(), sim.target)
+        sim.world.set_rates(command.rates)
+        sim.world.step(sim.dt)
+        self._extra_ticks += 1
+        if sim.world.diverged():
+            sim.diverged = True
+            return
+        error = (
+            np.hypot(*(sim.world.end_effector() - sim.target))
+            if sim.target is not None
+            else math.nan
+        )
+        self._extra = (command.solution.status.value, float(error), sim.world.torque_limited())
 
     def _do_pause(self) -> None:
         self.paused = not self.paused
@@ -314,9 +344,17 @@ class PlayState:
     def frame(self) -> Image.Image:
         """The state now as an export frame: the scene, the trail and the HUD."""
         trail = np.array([*self._trail, self.sim.world.end_effector()])
-        return render_snapshot(
-            self.sim.scene, self.sim.snapshot(), self.camera, self.theme, trail=trail
-        )
+        snapshot = self.sim.snapshot()
+        if self._extra is not None:
+            status, error, limited = self._extra
+            snapshot = replace(
+                snapshot,
+                time=snapshot.time + self._extra_ticks * self.sim.dt,
+                solver_status=status,
+                error=error,
+                torque_limited=limited,
+            )
+        return render_snapshot(self.sim.scene, snapshot, self.camera, self.theme, trail=trail)
 
     def image(self) -> Image.Image:
         """What the window shows: :meth:`frame` with the status line and, when asked for, the
@@ -335,7 +373,7 @@ class PlayState:
             parts.append("holding the target")
         if self.sim.done:
             result = self.sim.result
-            parts.append(f"run over: {result.status}, score {result.score:.0f}/100, r restarts")
+            parts.append(f"run over: {result.status}, score {result.score:.0f}/100; r restarts")
         elif self.paused:
             parts.append("paused (. steps)")
         parts.append("h: help")

@@ -73,6 +73,20 @@ def test_holding_the_mouse_drives_the_target_and_releasing_hands_it_back(level_f
     assert np.array_equal(state.sim.target, state.sim.script.target)
 
 
+def test_after_the_run_the_chain_still_follows_the_mouse_and_the_result_stays(level_file):
+    state = _state(level_file)
+    _run_out(state, iter(lambda: 1 / 30, None))
+    result = state.sim.result.as_dict()
+    pixel = tuple(int(v) for v in state.camera.world_to_pixel([[110.0, 90.0]])[0])
+    state.handle(MouseDown(pixel))
+    assert state.advance(0.25) == 60
+    for _ in range(60):
+        state.advance(1 / 30)
+    assert np.hypot(*(state.sim.joint_positions()[-1] - state.held)) < 3.0
+    assert state.sim.result.as_dict() == result == state.result.as_dict()
+    assert state.frame().size == (320, 180)
+
+
 def test_moving_the_mouse_without_the_button_moves_nothing(level_file):
     state = _state(level_file)
     state.handle(MouseMove((10, 10)))
