@@ -374,9 +374,8 @@ examples:
   ikgame play 12_push_the_ball --solver dls
   ikgame play my_level.toml --watch           reload the level each time the file is saved
 
-mouse:  hold the button to drag the target; release it to hand the target back to the script.
-keys:   space pause / resume   . or s one tick while paused   r restart   tab or n next solver
-        g gravity on / off     p screenshot into DIR          h or F1 help   esc or q quit
+in the window:
+{keys}
 
 The window is drawn by the same renderer as 'ikgame run' frames. The simulation runs at the
 level's tick rate whatever the display's frame rate; without mouse input a level ends exactly as
@@ -397,12 +396,16 @@ outputs whole. Needs the watch extra: python -m pip install 'ikgame[watch]'
 
 
 def _live_commands(sub: argparse._SubParsersAction) -> None:
+    from ikgame.app.state import help_lines
+
     play = sub.add_parser(
         "play",
         help="play a level live in a window: drag the target with the mouse",
         description="Run a level live in a window (pygame-ce) at its tick rate: drag the target "
         "with the mouse, pause, step, restart, switch solvers, toggle gravity, take screenshots.",
-        epilog=_PLAY_EPILOG,
+        epilog=_PLAY_EPILOG.format(
+            keys="\n".join(f"  {keys:<14} {what}" for keys, what in help_lines())
+        ),
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     play.add_argument("level", nargs="?", metavar="LEVEL", help="a level file or shipped name")

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import subprocess
 import sys
 
 import pytest
@@ -61,3 +62,12 @@ def test_play_opens_a_window_and_saves_screenshots_into_out(tmp_path, monkeypatc
     monkeypatch.setattr(PlayState, "advance", advance_then_quit)
     assert main(["play", "02_tentacle", "--size", "320x180", "--out", str(tmp_path)]) == 0
     assert [p.name for p in tmp_path.iterdir()] == ["screenshot-001.png"]
+
+
+def test_the_extras_are_imported_only_when_a_command_needs_them():
+    code = (
+        "import sys, ikgame.cli, ikgame.app.window, ikgame.app.watch; "
+        "print(sorted({'pygame', 'watchfiles'} & set(sys.modules)))"
+    )
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert proc.stdout.strip() == "[]"
