@@ -450,7 +450,7 @@ def _cmd_play(args: argparse.Namespace) -> int:
     if args.watch:
         _extra("watchfiles", "watch", "ikgame play --watch")
     from ikgame.app.state import PlayState
-    from ikgame.app.window import play
+    from ikgame.app.window import NoDisplay, play
 
     with _usage("--size"):
         size = parse_size(args.size)
@@ -462,7 +462,10 @@ def _cmd_play(args: argparse.Namespace) -> int:
     state.out_dir = (
         args.out if args.out is not None else Path("runs") / _slug(state.level.level.name)
     )
-    play(state, watch=args.watch)
+    try:
+        play(state, watch=args.watch)
+    except NoDisplay as exc:
+        raise UsageError(f"cannot open a window: {exc}; ikgame play needs a desktop") from None
     return EXIT_OK
 
 

@@ -71,3 +71,20 @@ def test_the_extras_are_imported_only_when_a_command_needs_them():
     )
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert proc.stdout.strip() == "[]"
+
+
+def test_play_without_a_display_says_so_instead_of_running_unseen(monkeypatch, capsys):
+    pygame = pytest.importorskip("pygame", reason="the play extra (pygame-ce) is not installed")
+    monkeypatch.delenv("SDL_VIDEODRIVER", raising=False)
+    monkeypatch.setattr(pygame.display, "init", lambda: None)
+    monkeypatch.setattr(pygame.display, "get_driver", lambda: "offscreen")
+    assert main(["play", "--size", "320x180"]) == 2
+    err = capsys.readouterr().err
+    assert "cannot open a window" in err and "'offscreen'" in err and "Traceback" not in err
+
+    def no_video() -> None:
+        raise pygame.error("x11 not available")
+
+    monkeypatch.setattr(pygame.display, "init", no_video)
+    assert main(["play", "--size", "320x180"]) == 2
+    assert "cannot open a window: x11 not available" in capsys.readouterr().err

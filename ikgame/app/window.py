@@ -8,6 +8,7 @@ module is the thin part that needs a display: the event pump, the blit and the l
 
 from __future__ import annotations
 
+import os
 import threading
 import time
 from collections.abc import Callable
@@ -17,10 +18,17 @@ from typing import Final
 from ikgame.app._extras import require
 from ikgame.app.state import KeyPress, MouseDown, MouseMove, MouseUp, PlayState
 
-__all__ = ["Window", "play"]
+__all__ = ["NoDisplay", "Window", "play"]
 
 MAX_FPS: Final = 60  # frames drawn per second at most: no display refreshes faster worth drawing
 LEFT_BUTTON: Final = 1
+# SDL's drivers that draw nowhere: SDL falls back to "offscreen" when it finds no display, which
+# would leave a window nobody can see (or close) running; tests ask for "dummy" on purpose.
+_INVISIBLE: Final = frozenset({"offscreen", "dummy"})
+
+
+class NoDisplay(RuntimeError):
+    """There is no display to open a window on."""
 
 
 class Window:
@@ -35,8 +43,19 @@ class Window:
         self.pygame = require("pygame", "play", "the window")
         self.state = state
         self.reload = reload
-        self.pygame.display.init()
-        self.surface = self.pygame.display.set_mode(state.size)
+        pg = self.pygame
+        try:
+            pg.display.init()
+            driver = pg.display.get_driver()
+            if driver in _INVISIBLE and "SDL_VIDEODRIVER" not in os.environ:
+                raise NoDisplay(f"SDL found no display, only its {driver!r} video driver")
+            self.surface = pg.display.set_mode(state.size)
+        except pg.error as exc:
+            pg.display.quit()
+            raise NoDisplay(str(exc)) from None
+        except NoDisplay:
+            pg.display.quit()
+            raise
         self._caption()
 
     def _caption(self) -> None:
