@@ -144,6 +144,8 @@ class PlayState:
         self.gravity_on = True
         self.held: np.ndarray | None = None  # the world point the mouse holds, px
         self.message = ""
+        # Counts changes to what the window shows: an unchanged picture is not drawn again.
+        self.revision = 0
         self._theme_override = theme
         self._solver = solver
         self._message_left = 0.0
@@ -172,6 +174,7 @@ class PlayState:
 
     def restart(self) -> None:
         """The level from its start, with the solver picked last and gravity on."""
+        self.revision += 1
         self.sim = Simulation(self.level, solver=self._solver, record=False)
         # The mouse can drive the chain anywhere within its reach, so the view holds the whole
         # reach around the base (a recorded run is not there yet to fit to); a level's own
@@ -208,9 +211,11 @@ class PlayState:
         """Show ``text`` for a few seconds."""
         self.message = text
         self._message_left = MESSAGE_SECONDS
+        self.revision += 1
 
     def handle(self, event: Event) -> None:
         """Apply one input event."""
+        self.revision += 1
         if isinstance(event, MouseDown):
             self.held = self.pixel_to_world(event.pixel)
             self.sim.target = self.held
@@ -245,8 +250,9 @@ class PlayState:
         if not (math.isfinite(seconds) and seconds >= 0):
             raise ValueError(f"seconds must be a finite number >= 0, got {seconds!r}")
         self._message_left = max(0.0, self._message_left - seconds)
-        if self._message_left == 0.0:
+        if self._message_left == 0.0 and self.message:
             self.message = ""
+            self.revision += 1
         if self.paused:
             ticks, self._pending_steps = self._pending_steps, 0
         else:
@@ -259,6 +265,7 @@ class PlayState:
                 break
             self._tick()
             ran += 1
+        self.revision += ran
         return ran
 
     def _tick(self) -> None:

@@ -57,6 +57,7 @@ class Window:
             pg.display.quit()
             raise
         self._caption()
+        self._drawn = -1  # the revision on screen
 
     def _caption(self) -> None:
         self.pygame.display.set_caption(f"ikgame: {self.state.level.level.name}")
@@ -75,21 +76,26 @@ class Window:
                 state.handle(MouseMove(event.pos))
             elif event.type == pg.MOUSEBUTTONUP and event.button == LEFT_BUTTON:
                 state.handle(MouseUp())
+            elif event.type in (pg.VIDEOEXPOSE, pg.WINDOWEXPOSED):
+                self._drawn = -1  # uncovered: the window's picture must be drawn again
 
     def frame(self, seconds: float) -> int:
-        """One frame after ``seconds`` of real time: events, the ticks that time holds, a
-        redraw. Returns the ticks run."""
+        """One frame after ``seconds`` of real time: events, the ticks that time holds, and a
+        redraw if anything changed (a paused window costs next to nothing). Returns the ticks
+        run."""
         if self.reload is not None and self.reload.is_set():
             self.reload.clear()
             if self.state.reload():
                 self._caption()
         self.pump()
         ticks = self.state.advance(seconds)
-        self.draw()
+        if self.state.revision != self._drawn:
+            self.draw()
         return ticks
 
     def draw(self) -> None:
         """Show the state's picture, drawn by the same Pillow renderer as the exports."""
+        self._drawn = self.state.revision
         image = self.state.image()
         picture = self.pygame.image.frombytes(image.tobytes(), image.size, "RGB")
         self.surface.blit(picture, (0, 0))

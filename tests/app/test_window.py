@@ -203,3 +203,17 @@ def test_play_runs_until_quit_and_closes_the_window(headless, level_file):
     play(state, clock=clock)
     assert state.quit and not pygame.display.get_init()
     assert state.sim.tick == 4 * 29  # 29 frames of 1/60 s at 240 ticks/s
+
+
+def test_a_paused_window_draws_only_when_something_changes(window, monkeypatch):
+    drawn = []
+    image = window.state.image
+    monkeypatch.setattr(window.state, "image", lambda: drawn.append(1) or image())
+    _frames(window, 3)
+    assert len(drawn) == 3
+    _key("space")
+    _frames(window, 10)
+    assert len(drawn) == 4  # the pause itself, then nothing
+    _key("h")
+    _frames(window, 2)
+    assert len(drawn) == 5
