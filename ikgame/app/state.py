@@ -186,6 +186,7 @@ class PlayState:
             maxlen=max(2, round(TRAIL_SECONDS * self.level.world.fps) + 1)
         )
         self._trail.append(self.sim.world.end_effector())
+        self._drawable = self.sim.snapshot()  # the latest state without a NaN in it
         self._backlog = 0.0
         self._pending_steps = 0
         # Ticks after the run ended, and the telemetry of the latest of them.
@@ -349,8 +350,8 @@ class PlayState:
         return path
 
     def frame(self) -> Image.Image:
-        """The state now as an export frame: the scene, the trail and the HUD."""
-        trail = np.array([*self._trail, self.sim.world.end_effector()])
+        """The state now as an export frame: the scene, the trail and the HUD. After the
+        physics blew up it is the last state that could be drawn, as exports end."""
         snapshot = self.sim.snapshot()
         if self._extra is not None:
             status, error, limited = self._extra
@@ -361,6 +362,11 @@ class PlayState:
                 error=error,
                 torque_limited=limited,
             )
+        if np.all(np.isfinite(snapshot.joints)) and np.all(np.isfinite(snapshot.props)):
+            self._drawable = snapshot
+        snapshot = self._drawable
+        trail = np.array([*self._trail, snapshot.joints[-1]])
+        trail = trail[np.all(np.isfinite(trail), axis=1)]
         return render_snapshot(self.sim.scene, snapshot, self.camera, self.theme, trail=trail)
 
     def image(self) -> Image.Image:

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 
@@ -139,6 +141,18 @@ def test_the_status_line_tells_the_run_is_over(level_file):
     _run_out(state, iter(lambda: 1 / 30, None))
     result = state.sim.result
     assert f"run over: {result.status}, score {result.score:.0f}/100" in state.status_line()
+
+
+def test_a_blown_up_world_shows_its_last_drawable_state(level_file):
+    state = _state(level_file)
+    state.advance(0.1)
+    before = state.frame()
+    state.sim.world.bodies[1].velocity = (math.inf, 0.0)
+    assert state.advance(0.1) == 1 and state.sim.diverged
+    assert state.advance(0.1) == 0  # nothing more to simulate
+    assert not np.all(np.isfinite(state.sim.joint_positions()))
+    assert state.frame().tobytes() == before.tobytes()
+    assert "run over: diverged" in state.status_line()
 
 
 def test_the_help_lists_every_key():
