@@ -228,6 +228,32 @@ class Simulation:
             self.snapshots.append(self.snapshot())
         if self.script.pending:
             self._apply(self.script.take_changes())
+        info = self._tick()
+        if info is None:
+            return self._last
+        finished = len(self.script.outcomes)
+        self.script.observe(self.time, self.dt, self.world.end_effector())
+        self._note_blocked(finished)
+        if self._has_goals:
+            self.goals.observe(self.time, self.world.prop_states())
+        self._last = info
+        return info
+
+    def play_on(self) -> TickInfo:
+        """One tick of control and physics toward :attr:`target` after the run is over.
+
+        For a live window that lets the chain follow the mouse once the level has ended: the
+        script, the goals and the recorded frames stay as they ended, and :attr:`result` with
+        them (the clock does not move on either).
+        """
+        if self.diverged:
+            return self._last
+        info = self._tick(count=False)
+        return self._last if info is None else info
+
+    def _tick(self, *, count: bool = True) -> TickInfo | None:
+        """Target, solve, command the motors, step the world, watch for a jam; None if the
+        physics blew up."""
         target = self.target
         self._release_if_moved(target)
         command = self.controller.command(
@@ -240,10 +266,10 @@ class Simulation:
         drive = command.drive
         self.world.drive(drive.rates, drive.torques, drive.forces, drive.budgets)
         self.world.step(self.dt)
-        self.tick += 1
+        self.tick += count
         if self.world.diverged():
             self.diverged = True
-            return self._last
+            return None
         if self.world.skeleton is not self.controller.skeleton:
             # The base moved: the solver must work from where it is now.
             self.controller.skeleton = self.world.skeleton
@@ -259,15 +285,7 @@ class Simulation:
                 self.controller.hold(self.world.joint_angles())
         if self._blocked_target is not None:
             status = "blocked"
-        finished = len(self.script.outcomes)
-        self.script.observe(self.time, self.dt, effector)
-        self._note_blocked(finished)
-        if self._has_goals:
-            self.goals.observe(self.time, self.world.prop_states())
-        self._last = TickInfo(
-            self.tick, self.time, status, command.solution.iterations, error, limited
-        )
-        return self._last
+        return TickInfo(self.tick, self.time, status, command.solution.iterations, error, limited)
 
     def _note_blocked(self, finished: int) -> None:
         """Mark the steps that ended while the chain was blocked, in their outcome's note."""

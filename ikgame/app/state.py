@@ -36,6 +36,8 @@ from ikgame.render.export import TRAIL_SECONDS
 from ikgame.render.pillow import render_snapshot
 from ikgame.render.theme import Theme, load_theme
 from ikgame.sim import RunResult, Simulation
+from ikgame.skins import level_sprites
+from ikgame.snapshot import Sprite
 
 __all__ = [
     "BINDINGS",
@@ -161,11 +163,13 @@ class PlayState:
             "help": self._do_help,
             "quit": self._do_quit,
         }
-        self._load(load_level(self.level_path))
+        level = load_level(self.level_path)
+        self._load(level, level_sprites(level, self.level_path))
 
-    def _load(self, level: Level) -> None:
-        """Start ``level`` (already validated) from its beginning."""
+    def _load(self, level: Level, sprites: tuple[tuple[Sprite | None, ...], ...]) -> None:
+        """Start ``level`` (already validated, its ``sprites`` decoded) from its beginning."""
         self.level = level
+        self._sprites = sprites
         if self._theme_override is not None:
             self.theme = self._theme_override
         else:
@@ -176,10 +180,13 @@ class PlayState:
         """The level from its start, with the solver picked last and gravity on."""
         self.revision += 1
         self.sim = Simulation(self.level, solver=self._solver, record=False)
+        links, props = self._sprites
+        # The window draws what an export draws, skins included.
+        self.scene = replace(self.sim.scene, link_sprites=links, prop_sprites=props)
         # The mouse can drive the chain anywhere within its reach, so the view holds the whole
         # reach around the base (a recorded run is not there yet to fit to); a level's own
         # [world] bounds win, as in exports.
-        self.camera = Camera.fit(self.sim.scene, self.level.chain.base, self.size)
+        self.camera = Camera.fit(self.scene, self.level.chain.base, self.size)
         self.gravity_on = True
         self._gravity = tuple(self.sim.world.space.gravity)
         self._trail: deque[np.ndarray] = deque(
@@ -201,10 +208,11 @@ class PlayState:
         show the first problem, and return False."""
         try:
             level = load_level(self.level_path)
+            sprites = level_sprites(level, self.level_path)
         except LevelError as exc:
             self.notify(f"not reloaded: {exc.problems[0]}")
             return False
-        self._load(level)
+        self._load(level, sprites)
         self.notify(f"reloaded {self.level_path.name}")
         return True
 
@@ -293,19 +301,11 @@ class PlayState:
         if self._extra_ticks == 0:
             # Judged now, before the player moves anything; the simulation keeps it from here.
             self.result = sim.result
-        command = sim.controller.command(sim.world.joint_angles(), sim.target)
-        sim.world.set_rates(command.rates)
-        sim.world.step(sim.dt)
+        info = sim.play_on()
         self._extra_ticks += 1
-        if sim.world.diverged():
-            sim.diverged = True
+        if sim.diverged:
             return
-        error = (
-            np.hypot(*(sim.world.end_effector() - sim.target))
-            if sim.target is not None
-            else math.nan
-        )
-        self._extra = (command.solution.status.value, float(error), sim.world.torque_limited())
+        self._extra = (info.solver_status, info.error, info.torque_limited)
 
     def _do_pause(self) -> None:
         self.paused = not self.paused
@@ -367,7 +367,7 @@ class PlayState:
         snapshot = self._drawable
         trail = np.array([*self._trail, snapshot.joints[-1]])
         trail = trail[np.all(np.isfinite(trail), axis=1)]
-        return render_snapshot(self.sim.scene, snapshot, self.camera, self.theme, trail=trail)
+        return render_snapshot(self.scene, snapshot, self.camera, self.theme, trail=trail)
 
     def image(self) -> Image.Image:
         """What the window shows: :meth:`frame` with the status line and, when asked for, the

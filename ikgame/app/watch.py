@@ -15,7 +15,7 @@ from pathlib import Path
 from typing import Final
 
 from ikgame.app._extras import require
-from ikgame.level.loader import LevelError, level_theme, load_level
+from ikgame.level.loader import LevelError, level_theme, load_level, sprite_fields, sprite_file
 
 __all__ = ["level_files", "watch_level"]
 
@@ -24,8 +24,8 @@ DEBOUNCE_MS: Final = 400  # ms at most to gather the changes of one save into on
 
 
 def level_files(level_path: str | Path) -> frozenset[Path]:
-    """The level file and every file it names (its theme file), as real paths. A level that
-    does not load names only itself, until it is fixed.
+    """The level file and every file it names (its theme file and sprite images), as real
+    paths. A level that does not load names only itself, until it is fixed.
 
     >>> from ikgame.level import DEFAULT_LEVEL
     >>> [p.name for p in level_files(DEFAULT_LEVEL)]
@@ -34,11 +34,14 @@ def level_files(level_path: str | Path) -> frozenset[Path]:
     path = Path(level_path)
     files = {path.resolve()}
     try:
-        theme = level_theme(load_level(path), path)
+        level = load_level(path)
+        theme = level_theme(level, path)
+        sprites = [sprite_file(name, path)[0] for _, name in sprite_fields(level)]
     except (LevelError, ValueError):
         return frozenset(files)
     if isinstance(theme, Path):
         files.add(theme.resolve())
+    files.update(sprite.resolve() for sprite in sprites)
     return frozenset(files)
 
 

@@ -186,3 +186,12 @@ def test_ctrl_c_stops_watching_with_exit_code_zero(tmp_path, level_file):
         proc.kill()
     assert "Traceback" not in proc.stderr.read()
     assert _results(out)["status"] == "passed"
+
+
+def test_the_files_of_a_skinned_level_include_its_sprites():
+    from ikgame.app.watch import level_files
+    from ikgame.level.library import LEVELS_DIR
+
+    names = {p.name for p in level_files(LEVELS_DIR / "14_skinned_arm.toml")}
+    assert "14_skinned_arm.toml" in names
+    assert {"upper_arm.png", "ball.png"} <= names
