@@ -21,7 +21,7 @@ WINDOW: Final = 0.5
 """How long the end effector must have made no progress, s."""
 
 PROGRESS: Final = 1.0
-"""Getting closer by less than this over the window is no progress, px."""
+"""An error that stays within a band this wide over the window makes no progress, px."""
 
 NEAR: Final = 2.0
 """Within this many arrival distances of the target nothing counts as blocked."""
@@ -60,7 +60,7 @@ class BlockWatch:
         self._pushes.append(pushing)
         if not reachable or error <= self._near or len(self._errors) < self._errors.maxlen:
             return False
-        # Measured from the worst of the window, so that a target that has just jumped away
-        # (the error shot up) does not read as a chain losing ground.
-        progress = max(self._errors) - error
-        return progress < PROGRESS and sum(self._pushes) * 2 >= len(self._pushes)
+        # Stuck means the error has stayed within one band for the whole window: a target that
+        # has just jumped away, or a chain bouncing off something, moves the error a lot.
+        stuck = max(self._errors) - min(self._errors) < PROGRESS
+        return stuck and sum(self._pushes) * 2 >= len(self._pushes)
