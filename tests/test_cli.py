@@ -30,6 +30,10 @@ def test_run_writes_results_and_exits_zero(tmp_path, capsys):
     assert data["status"] == "passed"
     assert all(step["final_error"] <= 6.0 for step in data["steps"])
     assert "passed" in capsys.readouterr().out
+    # The trajectory comes without pictures too: tuning motion needs no rendering.
+    motion = json.loads((out / "motion.json").read_text())
+    assert len(motion["frames"]) == round(data["sim_time"] * motion["fps"])
+    assert not (out / "frames").exists() and not (out / "run.gif").exists()
 
 
 def test_two_runs_write_byte_identical_results(tmp_path):
