@@ -126,19 +126,25 @@ class Servo:
         speed = np.minimum(
             np.minimum(self.max_speed, self.gain * size), np.sqrt(2.0 * brake * size)
         )
-        target = np.sign(error) * speed
-        if goal_rates is not None:
-            target = target + goal_rates
+        closing = np.sign(error) * speed
+        # Each joint's profile brakes it alone; stopping them all at once also loads the joints
+        # nearer the base with the others' deceleration. Stop together, by the time the first
+        # of them must have stopped (at a constant deceleration), within the braking share:
+        # those torques grow with the square of the velocities, so one factor fits them.
+        moving = np.abs(closing) > 1e-9
+        if np.any(moving):
+            stop_in = float(np.min(2.0 * np.abs(error[moving]) / np.abs(closing[moving])))
+            halt = inverse_dynamics(
+                self.inertia, world_angles, still, np.cumsum(-closing / stop_in), (0.0, 0.0)
+            )
+            closing = closing * _fit(np.abs(halt.torques), BRAKE_SHARE * spare)
+        target = closing if goal_rates is None else closing + goal_rates
         target = np.clip(target, -self.max_speed, self.max_speed)
         # Joints of a long chain moving at once whip its far end round: the torques that merely
         # keep those velocities grow with their square. Slow every joint by one factor until
         # they fit in the share of spare torque that braking leaves.
         spin = inverse_dynamics(self.inertia, world_angles, np.cumsum(target), still, (0.0, 0.0))
-        need = np.abs(spin.torques)
-        room = (1.0 - BRAKE_SHARE) * spare
-        over = need > room
-        if np.any(over):
-            target = target * math.sqrt(float(np.min(room[over] / need[over])))
+        target = target * _fit(np.abs(spin.torques), (1.0 - BRAKE_SHARE) * spare)
         # Approach that velocity no faster than each joint's spare torque allows: a servo that
         # asked for the whole change in one tick would saturate every motor after any knock.
         wanted = np.clip(target, velocities - reach * dt, velocities + reach * dt)
@@ -161,3 +167,12 @@ class Servo:
             budgets=np.maximum(self.max_torque - np.abs(drive.loads.torques), 0.0),
             saturated=drive.saturated,
         )
+
+
+def _fit(need: np.ndarray, room: np.ndarray) -> float:
+    """The factor (0..1) on velocities that brings loads growing with their square, ``need``,
+    within ``room``."""
+    over = need > room
+    if not np.any(over):
+        return 1.0
+    return math.sqrt(float(np.min(room[over] / need[over])))
