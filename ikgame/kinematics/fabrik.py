@@ -23,8 +23,7 @@ from itertools import accumulate
 
 import numpy as np
 
-from ikgame.kinematics._floats import FloatChain
-from ikgame.kinematics.ccd import TRIVIAL_ARC_LENGTH, wrap_angle
+from ikgame.kinematics.ccd import TRIVIAL_ARC_LENGTH, _Chain, wrap_angle
 from ikgame.kinematics.jacobian import _check_solve_inputs, _escape_saddle, _solution
 from ikgame.kinematics.skeleton import Skeleton
 from ikgame.kinematics.solver import Solution, SolveStatus
@@ -71,6 +70,7 @@ def solve_fabrik(
             error = math.hypot(xs[-1] - tx, ys[-1] - ty)
             status = SolveStatus.SUCCESS if error <= tolerance else SolveStatus.FAILURE
             return _solution(skeleton, stretched, status, 1, error)
+    has_limits = bool(skeleton.limited.any())
     used = 0
     while error > tolerance:
         if used == max_iterations:
@@ -84,6 +84,15 @@ def solve_fabrik(
             current, xs, ys, error = trial, trial_xs, trial_ys, trial_error
             if progress >= TRIVIAL_ARC_LENGTH:
                 continue
+        if has_limits:
+            # The passes fight over a joint at its limit; a CCD pass turns one joint at a time
+            # within its limits and slides the chain along them until the passes help again.
+            polished = links.iterate(current, tx, ty, tolerance * tolerance)[1]
+            p_xs, p_ys = links.joints(polished)
+            p_error = math.hypot(p_xs[-1] - tx, p_ys[-1] - ty)
+            if error - p_error >= TRIVIAL_ARC_LENGTH:
+                current, xs, ys, error = polished, p_xs, p_ys, p_error
+                continue
         escaped = _escape_saddle(
             skeleton, np.array(current), np.column_stack((xs, ys)), target, error
         )
@@ -95,7 +104,7 @@ def solve_fabrik(
     return _solution(skeleton, np.array(current), SolveStatus.SUCCESS, used, error)
 
 
-class _Links(FloatChain):
+class _Links(_Chain):
     """A chain as floats, with FABRIK's way of fitting an angle into a joint's limits."""
 
     def limited(self, i: int, angle: float, previous: float) -> float:
