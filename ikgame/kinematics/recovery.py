@@ -45,7 +45,7 @@ from typing import Final
 import numpy as np
 
 from ikgame.kinematics.ccd import wrap_angle
-from ikgame.kinematics.jacobian import _chain_points, _check_solve_inputs, _wrap_free
+from ikgame.kinematics.jacobian import _chain_points, _check_solve_inputs, _wrap_free, solve_dls
 from ikgame.kinematics.registry import get_solver
 from ikgame.kinematics.skeleton import Skeleton
 from ikgame.kinematics.solver import Solution, Solver, SolveStatus
@@ -76,8 +76,12 @@ RANDOM_SEEDS: Final = 8
 RANDOM_SEED: Final = 20091
 """Seed of the generator that draws the random restarts, fresh for every search."""
 
-STALL_PROGRESS: Final = 0.05
+STALL_PROGRESS: Final = 0.25
 """A solve still ``PROCESSING`` that gained less than this fraction of its start error stalled."""
+
+BACK_OFF: Final = 0.15
+"""The first restart moves every joint off its limits by this fraction of its range: the nearest
+pose where the joints pressed into their limits can move both ways."""
 
 ROUND_JOINTS: Final = 4
 """Joints, from the base out, that get a seed taking them the other way round their limits."""
@@ -265,11 +269,9 @@ class _Search:
         self.tolerance = tolerance
         self.best: np.ndarray | None = None
         self._best_error = math.inf
-        self._solvers = (solve, fallback)
-        # Each entry: (start angles, index of the first solver still to run from it); the plain
-        # solver already stopped at ``stalled``, so only the fallback runs from there.
-        self._queue: deque[tuple[np.ndarray, int]] = deque([(stalled, 1)])
-        self._seeds = _seeds(skeleton, stalled, target)
+        # Each entry: a start pose and the solvers still to run from it, one after the other.
+        self._queue: deque[tuple[np.ndarray, tuple[Solver, ...]]] = deque()
+        self._seeds = _seeds(skeleton, solve, fallback, stalled, target)
 
     @property
     def exhausted(self) -> bool:
@@ -287,15 +289,13 @@ class _Search:
             entry = self._next()
             if entry is None:
                 break
-            angles, first = entry
-            for index in range(first, len(self._solvers)):
+            angles, solvers = entry
+            for index, solver in enumerate(solvers):
                 allowed = min(SEED_ITERATIONS, budget - used)
                 if allowed < 1:
-                    self._queue.appendleft((angles, index))
+                    self._queue.appendleft((angles, solvers[index:]))
                     return used
-                sol = self._solvers[index](
-                    skeleton, angles, goal, max_iterations=allowed, tolerance=tolerance
-                )
+                sol = solver(skeleton, angles, goal, max_iterations=allowed, tolerance=tolerance)
                 used += sol.iterations
                 if sol.error < self._best_error:
                     self.best, self._best_error = sol.angles, sol.error
@@ -304,38 +304,49 @@ class _Search:
                 angles = sol.angles
         return used
 
-    def _next(self) -> tuple[np.ndarray, int] | None:
+    def _next(self) -> tuple[np.ndarray, tuple[Solver, ...]] | None:
         if self._queue:
             return self._queue.popleft()
         if self._seeds is not None:
             seed = next(self._seeds, None)
             if seed is not None:
-                return seed, 0
+                return seed
             self._seeds = None
         return None
 
 
-def _seeds(skeleton: Skeleton, stalled: np.ndarray, target: np.ndarray) -> Iterator[np.ndarray]:
-    """Restart poses, the nearest to ``stalled`` first (see the module notes)."""
+def _seeds(
+    skeleton: Skeleton, solve: Solver, fallback: Solver, stalled: np.ndarray, target: np.ndarray
+) -> Iterator[tuple[np.ndarray, tuple[Solver, ...]]]:
+    """Restart poses, each with the solvers to run from it, the nearest to ``stalled`` first.
+
+    Near the stalled pose damped least squares goes first: its steps are the shortest that
+    move the end effector, so it finds the answer nearest the pose rather than swinging the
+    chain round (CCD turns the last joints first, whatever the distance).
+    """
+    if solve is not solve_dls:
+        yield stalled, (solve_dls,)
+    yield _backed_off(skeleton, stalled), (solve_dls,)
+    both = (solve, fallback)
     points = _chain_points(skeleton, stalled)
     for j in range(min(ROUND_JOINTS, skeleton.count)):
         round_the_limit = _the_other_way_round(skeleton, stalled, points, j, target)
         if round_the_limit is not None:
-            yield round_the_limit
+            yield round_the_limit, both
     heading = math.atan2(*(target - skeleton.base)[::-1]) - skeleton.base_angle
     mirrored = -stalled
     mirrored[0] = 2.0 * heading - stalled[0]
-    yield _aimed(skeleton, skeleton.clamp(mirrored), target)
+    yield _aimed(skeleton, skeleton.clamp(mirrored), target), both
     bends_reversed = -stalled
     bends_reversed[0] = stalled[0]
-    yield _aimed(skeleton, skeleton.clamp(bends_reversed), target)
-    yield _stretched_toward(skeleton, target)
-    yield _aimed(skeleton, _middle(skeleton), target)
+    yield _aimed(skeleton, skeleton.clamp(bends_reversed), target), both
+    yield _stretched_toward(skeleton, target), both
+    yield _aimed(skeleton, _middle(skeleton), target), both
     rng = np.random.default_rng(RANDOM_SEED)
     low = np.maximum(skeleton.lower, -math.pi)
     high = np.minimum(skeleton.upper, math.pi)
     for _ in range(RANDOM_SEEDS):
-        yield _aimed(skeleton, rng.uniform(low, high), target)
+        yield _aimed(skeleton, rng.uniform(low, high), target), both
 
 
 def _the_other_way_round(
@@ -365,6 +376,14 @@ def _the_other_way_round(
     return seed if math.isfinite(seed[j]) else None
 
 
+def _backed_off(skeleton: Skeleton, angles: np.ndarray) -> np.ndarray:
+    """``angles`` with every joint moved ``BACK_OFF`` of its range away from its limits."""
+    low = np.maximum(skeleton.lower, -math.pi)
+    high = np.minimum(skeleton.upper, math.pi)
+    margin = BACK_OFF * (high - low)
+    return np.clip(angles, low + margin, high - margin)
+
+
 def _middle(skeleton: Skeleton) -> np.ndarray:
     """Each joint in the middle of its range; a joint open on a side sits at 0 if it may."""
     middle = np.where(
@@ -383,7 +402,8 @@ def _stretched_toward(skeleton: Skeleton, target: np.ndarray) -> np.ndarray:
 def _aimed(skeleton: Skeleton, angles: np.ndarray, target: np.ndarray) -> np.ndarray:
     """``angles`` with the base joint turned so the base-to-end line points at the target.
 
-    The turn goes whichever way round the base joint's limits allow, clamped if neither does.
+    The turn goes whichever way round the base joint's limits allow; ``angles`` (within the
+    limits) are returned as they are when neither way does.
     """
     end = _chain_points(skeleton, angles)[-1] - skeleton.base
     to_target = target - skeleton.base
@@ -391,9 +411,12 @@ def _aimed(skeleton: Skeleton, angles: np.ndarray, target: np.ndarray) -> np.nda
     wanted = wrap_angle(angles[0] + turn)
     low, high = skeleton.lower[0], skeleton.upper[0]
     choices = [c for c in (wanted, wanted - _TWO_PI, wanted + _TWO_PI) if low <= c <= high]
+    if not choices:
+        # Clamping the aim would pile every seed onto one limit; keep the seed's own variety.
+        return angles
     aimed = angles.copy()
-    aimed[0] = min(choices, key=lambda c: abs(c - angles[0])) if choices else wanted
-    return skeleton.clamp(aimed)
+    aimed[0] = min(choices, key=lambda c: abs(c - angles[0]))
+    return aimed
 
 
 def _error(skeleton: Skeleton, angles: np.ndarray, target: np.ndarray) -> float:
