@@ -36,6 +36,7 @@ Angles are radians, lengths and positions pixels.
 
 from __future__ import annotations
 
+import copy
 import math
 from collections import deque
 from collections.abc import Iterator
@@ -44,10 +45,11 @@ from typing import Final
 
 import numpy as np
 
+from ikgame.kinematics._floats import FloatChain
 from ikgame.kinematics.ccd import wrap_angle
-from ikgame.kinematics.jacobian import _chain_points, _check_solve_inputs, _wrap_free, solve_dls
+from ikgame.kinematics.jacobian import _chain_points, _check_settings, solve_dls
 from ikgame.kinematics.registry import get_solver
-from ikgame.kinematics.skeleton import Skeleton
+from ikgame.kinematics.skeleton import Skeleton, check_angles, check_point
 from ikgame.kinematics.solver import Solution, Solver, SolveStatus
 
 __all__ = [
@@ -58,17 +60,29 @@ __all__ = [
     "RANDOM_SEEDS",
     "RANDOM_SEED",
     "STALL_PROGRESS",
+    "RETRY_CALLS",
+    "STALL_CALLS",
 ]
 
-RESTART_BUDGET: Final = 200
-"""Default most iterations (of any solver) one call spends on restarts, beyond the plain solve.
+RESTART_BUDGET: Final = 100
+"""Default most iterations (of any solver) one call spends on restarts, beyond the plain solve:
+ten plain solves at the default 10 iterations a tick. A search that needs more goes on at the
+next call with the same target."""
 
-On the 500 seeded random cases of docs/solvers.md a recovery that succeeds needs a median of
-about 30 iterations; 200 lets most finish in the call that stalled while keeping a tick's worst
-case near twenty plain solves."""
-
-SEED_ITERATIONS: Final = 100
+SEED_ITERATIONS: Final = 50
 """Most iterations one restart runs in one go, so a seed that crawls cannot eat the budget."""
+
+STALL_CALLS: Final = 20
+"""Calls on one target still ``PROCESSING`` after which the solve counts as stalled anyway.
+
+CCD on a long chain can creep toward a target for hundreds of iterations, gaining a little on
+every call; 20 calls is 83 ms at 240 ticks/s."""
+
+RETRY_CALLS: Final = 10
+"""Calls without a new search after the target moved away from one that had not arrived.
+
+A target that moves every tick makes every search start afresh; a solver that lags behind it
+(say CCD on a long chain) would otherwise pay the whole budget on every tick."""
 
 RANDOM_SEEDS: Final = 8
 """Random poses (within the limits) tried after the deliberate seeds."""
@@ -76,7 +90,7 @@ RANDOM_SEEDS: Final = 8
 RANDOM_SEED: Final = 20091
 """Seed of the generator that draws the random restarts, fresh for every search."""
 
-STALL_PROGRESS: Final = 0.25
+STALL_PROGRESS: Final = 0.1
 """A solve still ``PROCESSING`` that gained less than this fraction of its start error stalled."""
 
 BACK_OFF: Final = 0.15
@@ -99,11 +113,13 @@ _TWO_PI: Final = 2.0 * math.pi
 
 @dataclass(frozen=True, eq=False)
 class _Answer:
-    """A cached answer: angles (read-only), the target and skeleton it was solved for, its error."""
+    """A cached answer: its angles (read-only, and as floats), the target (px) and chain it was
+    solved for, its error (px) and status."""
 
     angles: np.ndarray
-    target: np.ndarray
-    skeleton: Skeleton
+    listed: list[float]
+    target: tuple[float, float]
+    chain: FloatChain
     error: float
     status: SolveStatus
 
@@ -132,6 +148,8 @@ class RobustSolver:
             raise ValueError(f"budget must be an integer >= 0 iterations, got {budget!r}")
         self.budget = int(budget)
         self._skeleton = skeleton
+        self._chain = FloatChain(skeleton)
+        self._reach = skeleton.reach
         self._name = ""
         self._solve: Solver = get_solver(solver_name)
         self._fallback: Solver = self._solve
@@ -152,7 +170,15 @@ class RobustSolver:
             and np.array_equal(skeleton.upper, old.upper)
         )
         self._skeleton = skeleton
-        if not same_shape:
+        if same_shape:
+            # Only the base moved: the float copies of lengths and limits still hold.
+            chain = copy.copy(self._chain)
+            chain.base_x, chain.base_y = (float(v) for v in skeleton.base)
+            chain.base_angle = skeleton.base_angle
+            self._chain = chain
+        else:
+            self._chain = FloatChain(skeleton)
+            self._reach = skeleton.reach
             self.reset()
 
     @property
@@ -171,6 +197,10 @@ class RobustSolver:
         """Forget the cached answer and any search in progress."""
         self._answer: _Answer | None = None
         self._search: _Search | None = None
+        self._quiet = 0
+        self._last: np.ndarray | None = None
+        self._pending: tuple[float, float] | None = None
+        self._waiting = 0
 
     def solve(
         self,
@@ -180,77 +210,126 @@ class RobustSolver:
         max_iterations: int = 10,
         tolerance: float = 1.0,
     ) -> Solution:
-        """Desired angles toward ``target`` (px) from the measured ``angles`` (radians).
+        """Desired angles toward ``target`` (px); ``angles`` (radians) is the measured pose.
 
-        ``max_iterations`` bounds the plain solve; restarts add at most ``budget`` iterations.
-        ``Solution.iterations`` counts both. The answer's angles are read-only.
+        The measured pose is the warm start of the first solve (and after :meth:`reset`); after
+        that each solve starts from the last answer, where the chain is being driven, so a
+        solve that ran out of iterations carries on where it stopped and a moving target keeps
+        the branch it is on. ``max_iterations`` bounds the plain solve; restarts add at most
+        ``budget`` iterations; ``Solution.iterations`` counts both. Cached answers are returned
+        with read-only angles.
         """
-        skeleton = self._skeleton
-        start, goal, tol = _check_solve_inputs(skeleton, angles, target, max_iterations, tolerance)
-        answer = self._answer
-        if answer is not None:
-            error = self._error_of(answer, goal)
-            if error <= tol or (answer.status is SolveStatus.FAILURE and error == answer.error):
-                status = SolveStatus.SUCCESS if error <= tol else SolveStatus.FAILURE
-                return Solution(answer.angles, status, 0, error)
-        beyond = math.hypot(*(goal - skeleton.base)) - skeleton.reach
-        if beyond >= 0.0:
-            stretched = _stretched_toward(skeleton, goal)
-            stretched_error = _error(skeleton, stretched, goal)
-            # Only the straight chain aimed at the target comes this close; limits may forbid it.
-            if stretched_error <= beyond + 1e-9 * skeleton.reach:
-                status = SolveStatus.SUCCESS if stretched_error <= tol else SolveStatus.FAILURE
-                return self._keep(Solution(stretched, status, 0, stretched_error), goal)
-        start_error = _error(skeleton, start, goal)
-        if answer is not None and error < start_error:
-            start, start_error = answer.angles, error
-        plain = self._solve(skeleton, start, goal, max_iterations=max_iterations, tolerance=tol)
+        tol = _check_settings(max_iterations, tolerance)
+        measured = _angles_list(angles, self._skeleton.count)
+        goal = _point(target)
+        cached = self._cached(goal, tol)
+        if cached is not None:
+            return cached
+        if goal == self._pending:
+            self._waiting += 1
+        else:
+            self._pending, self._waiting = goal, 0
+        stretched = self._stretched(goal, tol)
+        if stretched is not None:
+            return self._keep(stretched, goal)
+        start = np.array(measured) if self._last is None else self._last
+        plain = self._solve(
+            self._skeleton, start, goal, max_iterations=max_iterations, tolerance=tol
+        )
         if plain.status is SolveStatus.SUCCESS:
             return self._keep(plain, goal)
-        stalled = plain.status is SolveStatus.FAILURE or (
-            start_error - plain.error < STALL_PROGRESS * start_error
+        return self._recover(start, plain, goal, tol)
+
+    def _cached(self, goal: tuple[float, float], tol: float) -> Solution | None:
+        """The cached answer while it reaches ``goal`` (or is the known best for it), else None.
+
+        Its error needs a forward kinematics unless the goal is the one it was solved for, or
+        moved too far from it for the answer to reach (the triangle inequality).
+        """
+        answer = self._answer
+        if answer is None:
+            return None
+        chain = self._chain
+        same = answer.chain is chain and answer.target == goal
+        if same:
+            error = answer.error
+        elif answer.chain is chain and (
+            math.hypot(goal[0] - answer.target[0], goal[1] - answer.target[1]) - answer.error > tol
+        ):
+            return None
+        else:
+            error = math.sqrt(chain.error_sqr(answer.listed, *goal))
+        if error <= tol:
+            self._last = answer.angles
+            return Solution(answer.angles, SolveStatus.SUCCESS, 0, error)
+        if same and answer.status is SolveStatus.FAILURE:
+            self._last = answer.angles
+            return Solution(answer.angles, SolveStatus.FAILURE, 0, error)
+        return None
+
+    def _stretched(self, goal: tuple[float, float], tol: float) -> Solution | None:
+        """The chain stretched toward a goal at or beyond its reach, when the limits allow it."""
+        chain = self._chain
+        beyond = math.hypot(goal[0] - chain.base_x, goal[1] - chain.base_y) - self._reach
+        if beyond < 0.0:
+            return None
+        stretched = _stretched_toward(self._skeleton, np.array(goal))
+        error = math.sqrt(chain.error_sqr(stretched.tolist(), *goal))
+        # Only the straight chain aimed at the target comes this close; limits may forbid it.
+        if error > beyond + 1e-9 * self._reach:
+            return None
+        status = SolveStatus.SUCCESS if error <= tol else SolveStatus.FAILURE
+        return Solution(stretched, status, 0, error)
+
+    def _recover(
+        self, start: np.ndarray, plain: Solution, goal: tuple[float, float], tol: float
+    ) -> Solution:
+        """After a plain solve that fell short: search when it stalled, keep the best."""
+        skeleton = self._skeleton
+        before = math.sqrt(self._chain.error_sqr(skeleton.clamp(start).tolist(), *goal))
+        stalled = (
+            plain.status is SolveStatus.FAILURE
+            or before - plain.error < STALL_PROGRESS * before
+            or self._waiting >= STALL_CALLS
         )
+        target = np.array(goal)
         search = self._search
-        if search is not None and not search.aims_at(goal, tol):
+        if search is not None and not search.aims_at(target, tol):
+            # The target moved on before the search arrived: wait before the next one.
             search = self._search = None
-        if search is None and not stalled:
+            self._quiet = RETRY_CALLS
+        if search is None and (not stalled or self._quiet > 0):
+            self._quiet = max(self._quiet - 1, 0)
+            self._last = plain.angles
             return plain
         if search is None:
             search = self._search = _Search(
-                skeleton, self._solve, self._fallback, plain.angles, goal, tol
+                skeleton, self._solve, self._fallback, plain.angles, target, tol
             )
-        used = search.run(skeleton, goal, tol, self.budget)
+        used = search.run(skeleton, target, tol, self.budget)
         best = plain
         if search.best is not None:
-            found_error = _error(skeleton, search.best, goal)
+            found_error = _error(skeleton, search.best, target)
             if found_error < plain.error:
                 best = Solution(search.best, plain.status, 0, found_error)
         iterations = plain.iterations + used
-        if best.error <= tol:
-            return self._keep(
-                Solution(best.angles, SolveStatus.SUCCESS, iterations, best.error), goal
-            )
-        if search.exhausted:
-            return self._keep(
-                Solution(best.angles, SolveStatus.FAILURE, iterations, best.error), goal
-            )
+        if best.error <= tol or search.exhausted:
+            status = SolveStatus.SUCCESS if best.error <= tol else SolveStatus.FAILURE
+            return self._keep(Solution(best.angles, status, iterations, best.error), goal)
+        self._last = best.angles
         return Solution(best.angles, SolveStatus.PROCESSING, iterations, best.error)
 
-    def _error_of(self, answer: _Answer, goal: np.ndarray) -> float:
-        """The cached answer's error for ``goal`` on the current skeleton, px."""
-        if answer.skeleton is self._skeleton and np.array_equal(answer.target, goal):
-            return answer.error
-        return _error(self._skeleton, answer.angles, goal)
-
-    def _keep(self, solution: Solution, goal: np.ndarray) -> Solution:
+    def _keep(self, solution: Solution, goal: tuple[float, float]) -> Solution:
         """Cache ``solution`` (an arrival, or the best there is) and return it read-only."""
-        angles = _wrap_free(self._skeleton, np.asarray(solution.angles, dtype=float))
+        # Every solver returns a new array, so it can be frozen and shared rather than copied.
+        angles = solution.angles
         angles.setflags(write=False)
-        target = goal.copy()
-        target.setflags(write=False)
-        self._answer = _Answer(angles, target, self._skeleton, solution.error, solution.status)
+        self._answer = _Answer(
+            angles, angles.tolist(), goal, self._chain, solution.error, solution.status
+        )
         self._search = None
-        return Solution(angles, solution.status, solution.iterations, solution.error)
+        self._last = angles
+        return solution
 
 
 class _Search:
@@ -417,6 +496,32 @@ def _aimed(skeleton: Skeleton, angles: np.ndarray, target: np.ndarray) -> np.nda
     aimed = angles.copy()
     aimed[0] = min(choices, key=lambda c: abs(c - angles[0]))
     return aimed
+
+
+def _angles_list(angles: object, count: int) -> list[float]:
+    """``angles`` as a list of floats, or ``ValueError`` (as :func:`check_angles` words it).
+
+    The common case, a float array of the right shape, is checked without numpy's per-call
+    overhead: this runs every tick.
+    """
+    if isinstance(angles, np.ndarray) and angles.shape == (count,) and angles.dtype == float:
+        listed = angles.tolist()
+        if all(map(math.isfinite, listed)):
+            return listed
+    return check_angles(angles, count).tolist()
+
+
+def _point(point: object) -> tuple[float, float]:
+    """``point`` as two finite floats, px, or ``ValueError`` (as :func:`check_point` words it)."""
+    if isinstance(point, np.ndarray) and point.shape == (2,) and point.dtype == float:
+        x, y = point.tolist()
+    elif isinstance(point, tuple) and len(point) == 2 and all(type(v) is float for v in point):
+        x, y = point
+    else:
+        x, y = check_point(point).tolist()
+    if not (math.isfinite(x) and math.isfinite(y)):
+        x, y = check_point(point).tolist()
+    return x, y
 
 
 def _error(skeleton: Skeleton, angles: np.ndarray, target: np.ndarray) -> float:
