@@ -170,6 +170,9 @@ class RobustSolver:
             and np.array_equal(skeleton.upper, old.upper)
         )
         self._skeleton = skeleton
+        unmoved = skeleton.base_angle == old.base_angle and np.array_equal(skeleton.base, old.base)
+        if same_shape and unmoved:
+            return
         if same_shape:
             # Only the base moved: the float copies of lengths and limits still hold.
             chain = copy.copy(self._chain)
@@ -300,8 +303,7 @@ class RobustSolver:
             self._quiet = RETRY_CALLS
         if search is None and (not stalled or self._quiet > 0):
             self._quiet = max(self._quiet - 1, 0)
-            self._last = plain.angles
-            return plain
+            return self._moving_on(plain)
         if search is None:
             search = self._search = _Search(
                 skeleton, self._solve, self._fallback, plain.angles, target, tol
@@ -316,8 +318,15 @@ class RobustSolver:
         if best.error <= tol or search.exhausted:
             status = SolveStatus.SUCCESS if best.error <= tol else SolveStatus.FAILURE
             return self._keep(Solution(best.angles, status, iterations, best.error), goal)
-        self._last = best.angles
-        return Solution(best.angles, SolveStatus.PROCESSING, iterations, best.error)
+        return self._moving_on(
+            Solution(best.angles, SolveStatus.PROCESSING, iterations, best.error)
+        )
+
+    def _moving_on(self, solution: Solution) -> Solution:
+        """Start the next call from ``solution`` (not cached: it has not arrived), read-only."""
+        solution.angles.setflags(write=False)
+        self._last = solution.angles
+        return solution
 
     def _keep(self, solution: Solution, goal: tuple[float, float]) -> Solution:
         """Cache ``solution`` (an arrival, or the best there is) and return it read-only."""

@@ -325,3 +325,59 @@ def test_the_same_calls_give_the_same_answers(name):
                 again.iterations,
                 again.error,
             )
+
+
+def test_a_new_target_is_solved_from_the_last_answer_until_reset():
+    # Both elbows reach every target here; the solve goes on from the branch it last answered
+    # with, whatever the measured pose says, until reset() hands the start back to the pose.
+    chain = Skeleton.chain([100.0, 100.0])
+    robust = RobustSolver(chain, "dls")
+    up = robust.solve(np.array([0.0, 1.0]), (120.0, 60.0), tolerance=TOLERANCE)
+    assert up.angles[1] > 0
+    elbow_down = np.array([1.0, -1.0])
+    assert robust.solve(elbow_down, (60.0, 120.0), tolerance=TOLERANCE).angles[1] > 0
+    robust.reset()
+    assert robust.solve(elbow_down, (120.0, 60.0), tolerance=TOLERANCE).angles[1] < 0
+
+
+@pytest.mark.parametrize(
+    ("call", "message"),
+    [
+        ({"angles": np.zeros(3)}, "angles must have shape (2,), got shape (3,)"),
+        ({"angles": [0.0, math.nan]}, "angles must be finite, got [0.0, nan]"),
+        ({"target": (1.0, 2.0, 3.0)}, "target must have shape (2,), got shape (3,)"),
+        ({"target": (math.inf, 0.0)}, "target must be finite, got [inf, 0.0]"),
+        ({"target": "up"}, "target must be a pair of numbers (x, y), got 'up'"),
+        ({"max_iterations": 0}, "max_iterations must be an integer >= 1, got 0"),
+        ({"tolerance": -1.0}, "tolerance must be finite and >= 0 px, got -1.0"),
+    ],
+    ids=repr,
+)
+def test_bad_input_is_named_in_the_message(call, message):
+    robust = RobustSolver(Skeleton.chain([100.0, 100.0]), "ccd")
+    # Also with a cached answer, which the checks must not skip.
+    robust.solve(np.zeros(2), (0.0, 150.0), tolerance=TOLERANCE)
+    arguments = {"angles": np.zeros(2), "target": (0.0, 150.0)} | call
+    with pytest.raises(ValueError) as info:
+        robust.solve(arguments.pop("angles"), arguments.pop("target"), **arguments)
+    assert str(info.value) == message
+
+
+def test_answers_cannot_be_changed_in_place():
+    arm, target = _elbow_arm()
+    robust = RobustSolver(arm, "ccd", budget=0)
+    for _ in range(3):
+        sol = robust.solve(arm.lower, target, max_iterations=2, tolerance=TOLERANCE)
+        with pytest.raises(ValueError):
+            sol.angles[0] = 0.0
+
+
+def test_another_chain_forgets_the_answer():
+    robust = RobustSolver(Skeleton.chain([100.0, 80.0]), "fabrik")
+    sol = robust.solve(np.array([0.5, 0.5]), (90.0, 90.0), tolerance=TOLERANCE)
+    robust.skeleton = Skeleton.chain([60.0, 60.0])
+    again = robust.solve(sol.angles, (90.0, 20.0), tolerance=TOLERANCE)
+    assert again.status is SolveStatus.SUCCESS
+    assert np.hypot(*(_end(robust.skeleton, again.angles) - (90.0, 20.0))) <= TOLERANCE
+    with pytest.raises(ValueError, match="angles must have shape"):
+        robust.solve(np.zeros(3), (90.0, 20.0))
