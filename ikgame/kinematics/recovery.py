@@ -6,27 +6,32 @@ base on its -30 deg stop when the answer needs +100 deg, a chain coiled into its
 that bends one way only). :class:`RobustSolver` wraps one of them for one chain and is called
 once per tick:
 
-1. **Cached answer.** While the last answer still puts the end effector within the tolerance of
-   the target it is returned as it is, with zero iterations: a settled chain costs one forward
-   kinematics, nothing when neither target nor skeleton changed. This is also the hysteresis
-   that keeps a chain on one branch (elbow up or down) rather than flipping between two answers
-   that both reach.
-2. **Plain solve**, warm-started from whichever is nearer the target: the given (measured) pose,
-   or the last answer (a moving target then stays on the branch the chain is following). When
-   it arrives, or is still making headway, that is the answer: the common case costs what the
-   raw solver costs.
-3. **Recovery**, only when the plain solve stalled (``FAILURE``, or ``PROCESSING`` having gained
-   less than ``STALL_PROGRESS`` of its start error) short of a target within reach. It restarts
-   from other seeds, nearest first: the fallback solver from where the plain one stopped; each
-   joint taken the other way round to aim at the target, inside its limits; the pose mirrored
-   across the line from the base to the target, and with its bends reversed; the chain stretched
-   toward the target; the middle of every joint's range; then ``RANDOM_SEEDS`` poses drawn within
-   the limits by a generator seeded with ``RANDOM_SEED`` (so the same inputs give the same
-   answer). Each seed runs the solver, then the fallback from where that stopped. The first seed
-   that arrives wins; otherwise the lowest error is kept. At most ``budget`` iterations go into
-   restarts per call; a search that runs out carries on at the next call with the same target,
-   and one that has tried every seed is cached as ``FAILURE``, so an unreachable target costs
-   nothing after that.
+1. **Cached answer.** While the last answer (an arrival, or the best there is for a target no
+   pose reaches) still puts the end effector within the tolerance of the target, it is returned
+   as it is, with zero iterations: a settled chain costs no solve, and nothing but the input
+   checks when neither target nor skeleton changed. This is also the hysteresis that keeps a
+   chain on one branch (elbow up or down) rather than flipping between two answers that reach.
+2. **Plain solve**, warm-started from the last answer (from the given, measured, pose on the
+   first call and after :meth:`RobustSolver.reset`): a solve that ran out of iterations goes on
+   where it stopped, and a moving target stays on the branch the chain is being driven along.
+   When it arrives, or is still making headway, that is the answer: the common case costs the
+   raw solver's iterations.
+3. **Recovery**, only when the plain solve stalled short of a target within reach: ``FAILURE``;
+   ``PROCESSING`` having gained less than ``STALL_PROGRESS`` of its start error; or
+   ``STALL_CALLS`` calls on one target without arriving. It restarts from other seeds, the
+   nearest to the stalled pose first. Damped least squares goes first from the stalled pose and
+   from it moved ``BACK_OFF`` off the limits (its steps are the shortest that move the end
+   effector, so it finds the answer nearest the pose). Then, each running the solver and the
+   ``FALLBACK`` solver from where that stopped: each of the first ``ROUND_JOINTS`` joints turned
+   to aim at the target the other way round its limits; the pose mirrored across the line from
+   the base to the target, and with its bends reversed; the chain stretched toward the target;
+   the middle of every joint's range; ``RANDOM_SEEDS`` poses drawn within the limits by a
+   generator seeded with ``RANDOM_SEED`` (the same inputs give the same answers). The first seed
+   that arrives wins; otherwise the lowest error is kept. A call spends at most ``budget``
+   iterations on restarts; a search that runs out carries on at the next call with the same
+   target, and one that has tried every seed is cached as ``FAILURE``, so an unreachable target
+   costs nothing after that. When the target moves on before a search arrives, no new search
+   starts for ``RETRY_CALLS`` calls.
 
 A target beyond the chain's reach gets the chain stretched straight toward it at once, when the
 limits allow that pose (it is the closest any pose can come), with ``FAILURE``.
@@ -39,8 +44,9 @@ from __future__ import annotations
 import copy
 import math
 from collections import deque
-from collections.abc import Iterator
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
+from types import MappingProxyType
 from typing import Final
 
 import numpy as np
@@ -62,6 +68,9 @@ __all__ = [
     "STALL_PROGRESS",
     "RETRY_CALLS",
     "STALL_CALLS",
+    "SETTLED",
+    "FAR",
+    "STILL_CALLS",
 ]
 
 RESTART_BUDGET: Final = 100
@@ -90,7 +99,18 @@ RANDOM_SEEDS: Final = 8
 RANDOM_SEED: Final = 20091
 """Seed of the generator that draws the random restarts, fresh for every search."""
 
-STALL_PROGRESS: Final = 0.1
+FAR: Final = 0.5
+"""An answer a restart found with some joint more than this (radians, about 30 deg) from where
+the plain solve stalled is followed all the way (see :meth:`RobustSolver._cached`)."""
+
+SETTLED: Final = 0.01
+"""A chain within this of its cached answer on every joint (radians, about 0.6 deg) has settled
+on it, and gets the answer again without a solve."""
+
+STILL_CALLS: Final = 2
+"""Calls with one and the same target before restarts may go far from the stalled pose."""
+
+STALL_PROGRESS: Final = 0.01
 """A solve still ``PROCESSING`` that gained less than this fraction of its start error stalled."""
 
 BACK_OFF: Final = 0.15
@@ -100,12 +120,9 @@ pose where the joints pressed into their limits can move both ways."""
 ROUND_JOINTS: Final = 4
 """Joints, from the base out, that get a seed taking them the other way round their limits."""
 
-FALLBACK: Final = {
-    "ccd": "dls",
-    "dls": "ccd",
-    "fabrik": "dls",
-    "jacobian_transpose": "dls",
-}
+FALLBACK: Final[Mapping[str, str]] = MappingProxyType(
+    {"ccd": "dls", "dls": "ccd", "fabrik": "dls", "jacobian_transpose": "dls"}
+)
 """The solver each solver's restarts fall back on: another method is trapped elsewhere."""
 
 _TWO_PI: Final = 2.0 * math.pi
@@ -122,6 +139,8 @@ class _Answer:
     chain: FloatChain
     error: float
     status: SolveStatus
+    followed: bool
+    """Found by a far restart: followed while it reaches, wherever the chain is on its way."""
 
 
 class RobustSolver:
@@ -134,10 +153,13 @@ class RobustSolver:
 
     >>> arm = Skeleton.chain([100, 80, 60], limits=[(-0.52, 2.09), (0.17, 2.97), (-2.97, -0.17)])
     >>> robust = RobustSolver(arm, "ccd")
-    >>> sol = robust.solve(arm.lower, (-150.0, 20.0), max_iterations=10, tolerance=0.5)
+    >>> pose = arm.lower  # the base on its stop; the target is the long way round
+    >>> for tick in range(3):
+    ...     sol = robust.solve(pose, (-150.0, 20.0), max_iterations=10, tolerance=0.5)
+    ...     pose = sol.angles
     >>> sol.status.value, sol.error <= 0.5
     ('success', True)
-    >>> robust.solve(sol.angles, (-150.0, 20.0), max_iterations=10, tolerance=0.5).iterations
+    >>> robust.solve(pose, (-150.0, 20.0), max_iterations=10, tolerance=0.5).iterations
     0
     """
 
@@ -201,7 +223,6 @@ class RobustSolver:
         self._answer: _Answer | None = None
         self._search: _Search | None = None
         self._quiet = 0
-        self._last: np.ndarray | None = None
         self._pending: tuple[float, float] | None = None
         self._waiting = 0
 
@@ -213,19 +234,15 @@ class RobustSolver:
         max_iterations: int = 10,
         tolerance: float = 1.0,
     ) -> Solution:
-        """Desired angles toward ``target`` (px); ``angles`` (radians) is the measured pose.
+        """Desired angles toward ``target`` (px), warm-started from the measured ``angles``.
 
-        The measured pose is the warm start of the first solve (and after :meth:`reset`); after
-        that each solve starts from the last answer, where the chain is being driven, so a
-        solve that ran out of iterations carries on where it stopped and a moving target keeps
-        the branch it is on. ``max_iterations`` bounds the plain solve; restarts add at most
-        ``budget`` iterations; ``Solution.iterations`` counts both. Cached answers are returned
-        with read-only angles.
+        ``max_iterations`` bounds the plain solve; restarts add at most ``budget`` iterations;
+        ``Solution.iterations`` counts both. Answers that are cached come back read-only.
         """
         tol = _check_settings(max_iterations, tolerance)
         measured = _angles_list(angles, self._skeleton.count)
         goal = _point(target)
-        cached = self._cached(goal, tol)
+        cached = self._cached(measured, goal, tol)
         if cached is not None:
             return cached
         if goal == self._pending:
@@ -234,41 +251,50 @@ class RobustSolver:
             self._pending, self._waiting = goal, 0
         stretched = self._stretched(goal, tol)
         if stretched is not None:
-            return self._keep(stretched, goal)
-        start = np.array(measured) if self._last is None else self._last
+            return self._keep(stretched, goal, followed=False)
+        start = np.array(measured)
         plain = self._solve(
             self._skeleton, start, goal, max_iterations=max_iterations, tolerance=tol
         )
         if plain.status is SolveStatus.SUCCESS:
-            return self._keep(plain, goal)
+            # Arriving from where an unfinished search left the chain is that search's answer.
+            search = self._search
+            followed = (
+                search is not None
+                and search.aims_at(np.array(goal), tol)
+                and _far(plain.angles, search.stalled)
+            )
+            return self._keep(plain, goal, followed)
         return self._recover(start, plain, goal, tol)
 
-    def _cached(self, goal: tuple[float, float], tol: float) -> Solution | None:
-        """The cached answer while it reaches ``goal`` (or is the known best for it), else None.
+    def _cached(
+        self, measured: list[float], goal: tuple[float, float], tol: float
+    ) -> Solution | None:
+        """The cached answer if it still serves, else None.
 
-        Its error needs a forward kinematics unless the goal is the one it was solved for, or
-        moved too far from it for the answer to reach (the triangle inequality).
+        An answer a restart found ``FAR`` from the stalled pose is followed while it reaches the
+        goal, wherever the chain is on its way there: solving from the measured pose half way
+        could fall back into the trap, or take the other branch. Any other arrival is returned
+        only while the chain has settled on it (every joint within ``SETTLED`` of it): on the way
+        there the plain solve from the measured pose answers, as the raw solver would. The best
+        pose for a goal no pose reaches is returned for as long as the goal stays the same.
         """
         answer = self._answer
         if answer is None:
             return None
         chain = self._chain
         same = answer.chain is chain and answer.target == goal
+        if same and answer.status is SolveStatus.FAILURE:
+            return Solution(answer.angles, SolveStatus.FAILURE, 0, answer.error)
+        if not (answer.followed or _within(measured, answer.listed, SETTLED)):
+            return None
         if same:
             error = answer.error
-        elif answer.chain is chain and (
-            math.hypot(goal[0] - answer.target[0], goal[1] - answer.target[1]) - answer.error > tol
-        ):
-            return None
         else:
             error = math.sqrt(chain.error_sqr(answer.listed, *goal))
-        if error <= tol:
-            self._last = answer.angles
-            return Solution(answer.angles, SolveStatus.SUCCESS, 0, error)
-        if same and answer.status is SolveStatus.FAILURE:
-            self._last = answer.angles
-            return Solution(answer.angles, SolveStatus.FAILURE, 0, error)
-        return None
+        if error > tol:
+            return None
+        return Solution(answer.angles, SolveStatus.SUCCESS, 0, error)
 
     def _stretched(self, goal: tuple[float, float], tol: float) -> Solution | None:
         """The chain stretched toward a goal at or beyond its reach, when the limits allow it."""
@@ -303,11 +329,14 @@ class RobustSolver:
             self._quiet = RETRY_CALLS
         if search is None and (not stalled or self._quiet > 0):
             self._quiet = max(self._quiet - 1, 0)
-            return self._moving_on(plain)
+            return plain
         if search is None:
             search = self._search = _Search(
                 skeleton, self._solve, self._fallback, plain.angles, target, tol
             )
+        # Far restarts only for a target that holds still: while it moves, an answer that
+        # swings the chain round would be stale before the chain got there.
+        search.far = self._waiting >= STILL_CALLS
         used = search.run(skeleton, target, tol, self.budget)
         best = plain
         if search.best is not None:
@@ -317,32 +346,27 @@ class RobustSolver:
         iterations = plain.iterations + used
         if best.error <= tol or search.exhausted:
             status = SolveStatus.SUCCESS if best.error <= tol else SolveStatus.FAILURE
-            return self._keep(Solution(best.angles, status, iterations, best.error), goal)
-        return self._moving_on(
-            Solution(best.angles, SolveStatus.PROCESSING, iterations, best.error)
-        )
+            followed = _far(best.angles, search.stalled)
+            return self._keep(Solution(best.angles, status, iterations, best.error), goal, followed)
+        return Solution(best.angles, SolveStatus.PROCESSING, iterations, best.error)
 
-    def _moving_on(self, solution: Solution) -> Solution:
-        """Start the next call from ``solution`` (not cached: it has not arrived), read-only."""
-        solution.angles.setflags(write=False)
-        self._last = solution.angles
-        return solution
-
-    def _keep(self, solution: Solution, goal: tuple[float, float]) -> Solution:
+    def _keep(self, solution: Solution, goal: tuple[float, float], followed: bool) -> Solution:
         """Cache ``solution`` (an arrival, or the best there is) and return it read-only."""
         # Every solver returns a new array, so it can be frozen and shared rather than copied.
         angles = solution.angles
         angles.setflags(write=False)
         self._answer = _Answer(
-            angles, angles.tolist(), goal, self._chain, solution.error, solution.status
+            angles, angles.tolist(), goal, self._chain, solution.error, solution.status, followed
         )
         self._search = None
-        self._last = angles
         return solution
 
 
 class _Search:
-    """Restarts for one target, resumable from call to call; remembers the best pose found."""
+    """Restarts for one target, resumable from call to call; remembers the best pose found.
+
+    The near seeds are always tried; the far ones only while ``far`` is set.
+    """
 
     def __init__(
         self,
@@ -355,16 +379,24 @@ class _Search:
     ) -> None:
         self.target = target.copy()
         self.tolerance = tolerance
+        self.stalled = stalled
+        self.far = False
         self.best: np.ndarray | None = None
         self._best_error = math.inf
-        # Each entry: a start pose and the solvers still to run from it, one after the other.
-        self._queue: deque[tuple[np.ndarray, tuple[Solver, ...]]] = deque()
-        self._seeds = _seeds(skeleton, solve, fallback, stalled, target)
+        # Each entry: a start pose, the solvers still to run from it one after the other, and
+        # whether it is a far seed.
+        self._queue: deque[tuple[np.ndarray, tuple[Solver, ...], bool]] = deque()
+        self._near: Iterator[tuple[np.ndarray, tuple[Solver, ...]]] | None = _near_seeds(
+            skeleton, solve, stalled
+        )
+        self._far: Iterator[tuple[np.ndarray, tuple[Solver, ...]]] | None = _far_seeds(
+            skeleton, solve, fallback, stalled, target
+        )
 
     @property
     def exhausted(self) -> bool:
-        """True once every seed has been tried."""
-        return not self._queue and self._seeds is None
+        """True once every seed, far ones included, has been tried."""
+        return not self._queue and self._near is None and self._far is None
 
     def aims_at(self, goal: np.ndarray, tolerance: float) -> bool:
         """Whether this search serves ``goal``: the same target, to within the tolerance."""
@@ -377,11 +409,11 @@ class _Search:
             entry = self._next()
             if entry is None:
                 break
-            angles, solvers = entry
+            angles, solvers, far = entry
             for index, solver in enumerate(solvers):
                 allowed = min(SEED_ITERATIONS, budget - used)
                 if allowed < 1:
-                    self._queue.appendleft((angles, solvers[index:]))
+                    self._queue.appendleft((angles, solvers[index:], far))
                     return used
                 sol = solver(skeleton, angles, goal, max_iterations=allowed, tolerance=tolerance)
                 used += sol.iterations
@@ -392,29 +424,37 @@ class _Search:
                 angles = sol.angles
         return used
 
-    def _next(self) -> tuple[np.ndarray, tuple[Solver, ...]] | None:
+    def _next(self) -> tuple[np.ndarray, tuple[Solver, ...], bool] | None:
         if self._queue:
             return self._queue.popleft()
-        if self._seeds is not None:
-            seed = next(self._seeds, None)
+        if self._near is not None:
+            seed = next(self._near, None)
             if seed is not None:
-                return seed
-            self._seeds = None
+                return (*seed, False)
+            self._near = None
+        if self._far is not None and self.far:
+            seed = next(self._far, None)
+            if seed is not None:
+                return (*seed, True)
+            self._far = None
         return None
 
 
-def _seeds(
-    skeleton: Skeleton, solve: Solver, fallback: Solver, stalled: np.ndarray, target: np.ndarray
+def _near_seeds(
+    skeleton: Skeleton, solve: Solver, stalled: np.ndarray
 ) -> Iterator[tuple[np.ndarray, tuple[Solver, ...]]]:
-    """Restart poses, each with the solvers to run from it, the nearest to ``stalled`` first.
-
-    Near the stalled pose damped least squares goes first: its steps are the shortest that
-    move the end effector, so it finds the answer nearest the pose rather than swinging the
-    chain round (CCD turns the last joints first, whatever the distance).
-    """
+    """Restarts next to the stalled pose, by damped least squares: its steps are the shortest
+    that move the end effector, so it finds the answer nearest the pose (CCD would turn the last
+    joints first, whatever the distance)."""
     if solve is not solve_dls:
         yield stalled, (solve_dls,)
     yield _backed_off(skeleton, stalled), (solve_dls,)
+
+
+def _far_seeds(
+    skeleton: Skeleton, solve: Solver, fallback: Solver, stalled: np.ndarray, target: np.ndarray
+) -> Iterator[tuple[np.ndarray, tuple[Solver, ...]]]:
+    """Restarts elsewhere in the joints' ranges, each run by the solver then its fallback."""
     both = (solve, fallback)
     points = _chain_points(skeleton, stalled)
     for j in range(min(ROUND_JOINTS, skeleton.count)):
@@ -531,6 +571,16 @@ def _point(point: object) -> tuple[float, float]:
     if not (math.isfinite(x) and math.isfinite(y)):
         x, y = check_point(point).tolist()
     return x, y
+
+
+def _far(angles: np.ndarray, stalled: np.ndarray) -> bool:
+    """Whether some joint of ``angles`` is more than ``FAR`` from the ``stalled`` pose."""
+    return float(np.abs(angles - stalled).max()) > FAR
+
+
+def _within(measured: list[float], answer: list[float], limit: float) -> bool:
+    """Whether every joint of ``measured`` is within ``limit`` radians of ``answer``."""
+    return all(abs(m - a) <= limit for m, a in zip(measured, answer, strict=True))
 
 
 def _error(skeleton: Skeleton, angles: np.ndarray, target: np.ndarray) -> float:
