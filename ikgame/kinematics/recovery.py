@@ -6,32 +6,33 @@ base on its -30 deg stop when the answer needs +100 deg, a chain coiled into its
 that bends one way only). :class:`RobustSolver` wraps one of them for one chain and is called
 once per tick:
 
-1. **Cached answer.** While the last answer (an arrival, or the best there is for a target no
-   pose reaches) still puts the end effector within the tolerance of the target, it is returned
-   as it is, with zero iterations: a settled chain costs no solve, and nothing but the input
-   checks when neither target nor skeleton changed. This is also the hysteresis that keeps a
-   chain on one branch (elbow up or down) rather than flipping between two answers that reach.
-2. **Plain solve**, warm-started from the last answer (from the given, measured, pose on the
-   first call and after :meth:`RobustSolver.reset`): a solve that ran out of iterations goes on
-   where it stopped, and a moving target stays on the branch the chain is being driven along.
-   When it arrives, or is still making headway, that is the answer: the common case costs the
-   raw solver's iterations.
+1. **Cached answer.** The last arrival is returned as it is, with zero iterations, while it
+   still puts the end effector within the tolerance of the target and either the chain has
+   settled on it (every joint within ``SETTLED``) or a restart found it ``FAR`` from where the
+   plain solve stalled. A settled chain costs no solve; and a chain on its way to an answer found
+   the long way round keeps heading there instead of falling back into the trap or flipping to
+   another branch half way (hysteresis). The best pose for a target no pose reaches is returned
+   for as long as that target stays.
+2. **Plain solve** from the measured pose, as the raw solver is called without this class: its
+   answer is the nearest to where the chain is. When it arrives, or is still making headway,
+   that is the answer: the common case costs the raw solver's iterations.
 3. **Recovery**, only when the plain solve stalled short of a target within reach: ``FAILURE``;
    ``PROCESSING`` having gained less than ``STALL_PROGRESS`` of its start error; or
    ``STALL_CALLS`` calls on one target without arriving. It restarts from other seeds, the
-   nearest to the stalled pose first. Damped least squares goes first from the stalled pose and
-   from it moved ``BACK_OFF`` off the limits (its steps are the shortest that move the end
-   effector, so it finds the answer nearest the pose). Then, each running the solver and the
-   ``FALLBACK`` solver from where that stopped: each of the first ``ROUND_JOINTS`` joints turned
-   to aim at the target the other way round its limits; the pose mirrored across the line from
-   the base to the target, and with its bends reversed; the chain stretched toward the target;
-   the middle of every joint's range; ``RANDOM_SEEDS`` poses drawn within the limits by a
-   generator seeded with ``RANDOM_SEED`` (the same inputs give the same answers). The first seed
-   that arrives wins; otherwise the lowest error is kept. A call spends at most ``budget``
-   iterations on restarts; a search that runs out carries on at the next call with the same
-   target, and one that has tried every seed is cached as ``FAILURE``, so an unreachable target
-   costs nothing after that. When the target moves on before a search arrives, no new search
-   starts for ``RETRY_CALLS`` calls.
+   nearest to the stalled pose first. Damped least squares goes first, from the stalled pose and
+   from that pose moved ``BACK_OFF`` off the limits: its steps are the shortest that move the
+   end effector, so it finds the answer nearest the pose. Once the target has held still for
+   ``STILL_CALLS`` calls (a moving target would be elsewhere by the time the chain had swung
+   round), far seeds follow, each run by the solver and then by its ``FALLBACK`` from where that
+   stopped: each of the first ``ROUND_JOINTS`` joints turned to aim at the target the other way
+   round its limits; the pose mirrored across the line from the base to the target, and with its
+   bends reversed; the chain stretched toward the target; the middle of every joint's range;
+   ``RANDOM_SEEDS`` poses drawn within the limits by a generator seeded with ``RANDOM_SEED`` (the
+   same inputs give the same answers). The first seed that arrives wins; otherwise the lowest
+   error is kept. A call spends at most ``budget`` iterations on restarts; a search that runs out
+   carries on at the next call with the same target, and one that has tried every seed is cached
+   as ``FAILURE``, so an unreachable target costs nothing after that. When the target moves on
+   before a search arrives, no new search starts for ``RETRY_CALLS`` calls.
 
 A target beyond the chain's reach gets the chain stretched straight toward it at once, when the
 limits allow that pose (it is the closest any pose can come), with ``FAILURE``.
