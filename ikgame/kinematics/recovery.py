@@ -514,13 +514,8 @@ def _backed_off(skeleton: Skeleton, angles: np.ndarray) -> np.ndarray:
 
 
 def _middle(skeleton: Skeleton) -> np.ndarray:
-    """Each joint in the middle of its range; a joint open on a side sits at 0 if it may."""
-    middle = np.where(
-        np.isfinite(skeleton.lower) & np.isfinite(skeleton.upper),
-        0.5 * (skeleton.lower + skeleton.upper),
-        0.0,
-    )
-    return skeleton.clamp(middle)
+    """Each joint in the middle of its range within [-pi, pi] (a free joint at 0), radians."""
+    return 0.5 * (np.maximum(skeleton.lower, -math.pi) + np.minimum(skeleton.upper, math.pi))
 
 
 def _stretched_toward(skeleton: Skeleton, target: np.ndarray) -> np.ndarray:

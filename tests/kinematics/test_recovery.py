@@ -10,6 +10,8 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from ikgame.kinematics import (
     SOLVERS,
@@ -390,3 +392,36 @@ def test_another_chain_forgets_the_answer():
     assert np.hypot(*(_end(robust.skeleton, again.angles) - (90.0, 20.0))) <= TOLERANCE
     with pytest.raises(ValueError, match="angles must have shape"):
         robust.solve(np.zeros(3), (90.0, 20.0))
+
+
+@pytest.mark.parametrize("name", NAMES)
+@settings(derandomize=True, deadline=None, max_examples=60)
+@given(
+    data=st.data(),
+    target=st.one_of(
+        st.tuples(st.floats(-3000.0, 3000.0), st.floats(-3000.0, 3000.0)),
+        st.sampled_from([(0.0, 0.0), (1e12, -1e12), (-1e-9, 1e-9)]),
+    ),
+    tolerance=st.sampled_from([0.0, 0.5, 5.0]),
+)
+def test_any_target_from_any_start_gives_a_sound_answer(name, data, target, tolerance):
+    # Reachable or not, on the base or absurdly far, from a start even past the limits.
+    seed = data.draw(st.integers(0, 2**32 - 1))
+    chain, _, _ = _case(np.random.default_rng(seed))
+    start = np.array(
+        data.draw(st.lists(st.floats(-10.0, 10.0), min_size=chain.count, max_size=chain.count))
+    )
+    robust = RobustSolver(chain, name, budget=40)
+    angles = start
+    for _ in range(3):
+        sol = robust.solve(angles, target, max_iterations=5, tolerance=tolerance)
+        assert np.all(np.isfinite(sol.angles))
+        assert np.all(sol.angles >= chain.lower) and np.all(sol.angles <= chain.upper)
+        measured = np.hypot(*(_end(chain, sol.angles) - target))
+        assert sol.error == pytest.approx(measured, rel=1e-9, abs=1e-6)
+        assert sol.iterations <= 5 + 40
+        if sol.status is SolveStatus.SUCCESS:
+            assert sol.error <= tolerance + 1e-9
+        else:
+            assert sol.error > tolerance - 1e-9
+        angles = sol.angles
