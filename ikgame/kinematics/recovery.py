@@ -8,8 +8,7 @@ once per tick:
 
 1. **Cached answer.** The last arrival is returned as it is, with zero iterations, while it
    still puts the end effector within the tolerance of the target and either the chain has
-   settled on it (every joint within ``SETTLED``) or a restart found it ``FAR`` from where the
-   plain solve stalled. A settled chain costs no solve; and a chain on its way to an answer found
+   settled on it (every joint within ``SETTLED``) or a restart from a far seed found it. A settled chain costs no solve; and a chain on its way to an answer found
    the long way round keeps heading there instead of falling back into the trap or flipping to
    another branch half way (hysteresis). The best pose for a target no pose reaches is returned
    for as long as that target stays.
@@ -70,7 +69,6 @@ __all__ = [
     "RETRY_CALLS",
     "STALL_CALLS",
     "SETTLED",
-    "FAR",
     "STILL_CALLS",
 ]
 
@@ -99,10 +97,6 @@ RANDOM_SEEDS: Final = 8
 
 RANDOM_SEED: Final = 20091
 """Seed of the generator that draws the random restarts, fresh for every search."""
-
-FAR: Final = 0.5
-"""An answer a restart found with some joint more than this (radians, about 30 deg) from where
-the plain solve stalled is followed all the way (see :meth:`RobustSolver._cached`)."""
 
 SETTLED: Final = 0.01
 """A chain within this of its cached answer on every joint (radians, about 0.6 deg) has settled
@@ -261,9 +255,7 @@ class RobustSolver:
             # Arriving from where an unfinished search left the chain is that search's answer.
             search = self._search
             followed = (
-                search is not None
-                and search.aims_at(np.array(goal), tol)
-                and _far(plain.angles, search.stalled)
+                search is not None and search.aims_at(np.array(goal), tol) and search.best_far
             )
             return self._keep(plain, goal, followed)
         return self._recover(start, plain, goal, tol)
@@ -273,7 +265,7 @@ class RobustSolver:
     ) -> Solution | None:
         """The cached answer if it still serves, else None.
 
-        An answer a restart found ``FAR`` from the stalled pose is followed while it reaches the
+        An answer a restart from a far seed found is followed while it reaches the
         goal, wherever the chain is on its way there: solving from the measured pose half way
         could fall back into the trap, or take the other branch. Any other arrival is returned
         only while the chain has settled on it (every joint within ``SETTLED`` of it): on the way
@@ -287,7 +279,7 @@ class RobustSolver:
         same = answer.chain is chain and answer.target == goal
         if same and answer.status is SolveStatus.FAILURE:
             return Solution(answer.angles, SolveStatus.FAILURE, 0, answer.error)
-        if not (answer.followed or _within(measured, answer.listed, SETTLED)):
+        if not (answer.followed or _within(chain, measured, answer.listed)):
             return None
         if same:
             error = answer.error
@@ -347,7 +339,7 @@ class RobustSolver:
         iterations = plain.iterations + used
         if best.error <= tol or search.exhausted:
             status = SolveStatus.SUCCESS if best.error <= tol else SolveStatus.FAILURE
-            followed = _far(best.angles, search.stalled)
+            followed = best is not plain and search.best_far
             return self._keep(Solution(best.angles, status, iterations, best.error), goal, followed)
         return Solution(best.angles, SolveStatus.PROCESSING, iterations, best.error)
 
@@ -383,6 +375,7 @@ class _Search:
         self.stalled = stalled
         self.far = False
         self.best: np.ndarray | None = None
+        self.best_far = False
         self._best_error = math.inf
         # Each entry: a start pose, the solvers still to run from it one after the other, and
         # whether it is a far seed.
@@ -419,7 +412,7 @@ class _Search:
                 sol = solver(skeleton, angles, goal, max_iterations=allowed, tolerance=tolerance)
                 used += sol.iterations
                 if sol.error < self._best_error:
-                    self.best, self._best_error = sol.angles, sol.error
+                    self.best, self.best_far, self._best_error = sol.angles, far, sol.error
                 if sol.status is SolveStatus.SUCCESS:
                     return used
                 angles = sol.angles
@@ -569,14 +562,14 @@ def _point(point: object) -> tuple[float, float]:
     return x, y
 
 
-def _far(angles: np.ndarray, stalled: np.ndarray) -> bool:
-    """Whether some joint of ``angles`` is more than ``FAR`` from the ``stalled`` pose."""
-    return float(np.abs(angles - stalled).max()) > FAR
-
-
-def _within(measured: list[float], answer: list[float], limit: float) -> bool:
-    """Whether every joint of ``measured`` is within ``limit`` radians of ``answer``."""
-    return all(abs(m - a) <= limit for m, a in zip(measured, answer, strict=True))
+def _within(chain: FloatChain, measured: list[float], answer: list[float]) -> bool:
+    """Whether every joint of ``measured`` is within ``SETTLED`` of ``answer`` (a free joint the
+    short way round)."""
+    for m, a, free in zip(measured, answer, chain.free, strict=True):
+        gap = abs(m - a)
+        if gap > SETTLED and not (free and abs(wrap_angle(m - a)) <= SETTLED):
+            return False
+    return True
 
 
 def _error(skeleton: Skeleton, angles: np.ndarray, target: np.ndarray) -> float:
