@@ -6,12 +6,12 @@ base on its -30 deg stop when the answer needs +100 deg, a chain coiled into its
 that bends one way only). :class:`RobustSolver` wraps one of them for one chain and is called
 once per tick:
 
-1. **Cached answer.** The last arrival is returned as it is, with zero iterations, while it
-   still puts the end effector within the tolerance of the target and either the chain has
-   settled on it (every joint within ``SETTLED``) or a restart from a far seed found it. A settled chain costs no solve; and a chain on its way to an answer found
-   the long way round keeps heading there instead of falling back into the trap or flipping to
-   another branch half way (hysteresis). The best pose for a target no pose reaches is returned
-   for as long as that target stays.
+1. **Cached answer.** An answer that a restart from a far seed found is returned as it is,
+   with zero iterations, while it still puts the end effector within the tolerance of the target
+   and until the chain has arrived on it (every joint within ``SETTLED``): a chain on its way to
+   an answer found the long way round keeps heading there instead of falling back into the trap
+   or flipping to another branch half way (hysteresis). The best pose for a target no pose
+   reaches is returned, for nothing, for as long as that target stays.
 2. **Plain solve** from the measured pose, as the raw solver is called without this class: its
    answer is the nearest to where the chain is. When it arrives, or is still making headway,
    that is the answer: the common case costs the raw solver's iterations.
@@ -45,7 +45,7 @@ import copy
 import math
 from collections import deque
 from collections.abc import Iterator, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from types import MappingProxyType
 from typing import Final
 
@@ -99,8 +99,8 @@ RANDOM_SEED: Final = 20091
 """Seed of the generator that draws the random restarts, fresh for every search."""
 
 SETTLED: Final = 0.01
-"""A chain within this of its cached answer on every joint (radians, about 0.6 deg) has settled
-on it, and gets the answer again without a solve."""
+"""A chain within this of a followed answer on every joint (radians, about 0.6 deg) has arrived:
+from then on the plain solve answers again."""
 
 STILL_CALLS: Final = 2
 """Calls with one and the same target before restarts may go far from the stalled pose."""
@@ -265,12 +265,13 @@ class RobustSolver:
     ) -> Solution | None:
         """The cached answer if it still serves, else None.
 
-        An answer a restart from a far seed found is followed while it reaches the
-        goal, wherever the chain is on its way there: solving from the measured pose half way
-        could fall back into the trap, or take the other branch. Any other arrival is returned
-        only while the chain has settled on it (every joint within ``SETTLED`` of it): on the way
-        there the plain solve from the measured pose answers, as the raw solver would. The best
-        pose for a goal no pose reaches is returned for as long as the goal stays the same.
+        An answer a restart from a far seed found is followed while it reaches the goal and the
+        chain is on its way there: solving from the measured pose half way could fall back into
+        the trap, or take the other branch. Once the chain is within ``SETTLED`` of it on every
+        joint, the plain solve takes over again, from the measured pose: re-solving from where
+        the motors actually hold the chain (sagging under gravity, say) is what brings the end
+        effector the last pixels. The best pose for a goal no pose reaches is returned for as
+        long as the goal stays the same.
         """
         answer = self._answer
         if answer is None:
@@ -279,12 +280,12 @@ class RobustSolver:
         same = answer.chain is chain and answer.target == goal
         if same and answer.status is SolveStatus.FAILURE:
             return Solution(answer.angles, SolveStatus.FAILURE, 0, answer.error)
-        if not (answer.followed or _within(chain, measured, answer.listed)):
+        if not answer.followed:
             return None
-        if same:
-            error = answer.error
-        else:
-            error = math.sqrt(chain.error_sqr(answer.listed, *goal))
+        if _within(chain, measured, answer.listed):
+            self._answer = replace(answer, followed=False)
+            return None
+        error = answer.error if same else math.sqrt(chain.error_sqr(answer.listed, *goal))
         if error > tol:
             return None
         return Solution(answer.angles, SolveStatus.SUCCESS, 0, error)
