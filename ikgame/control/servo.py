@@ -32,6 +32,17 @@ from ikgame.control.dynamics import ChainInertia, Pose, fit_drive
 
 __all__ = ["Servo", "ServoCommand"]
 
+STALL_TIME: Final = 0.1
+"""How long a joint must be carried away from its goal, s, to count as stalled: a knock or the
+last of a previous move's momentum is not a stall."""
+
+STALL_SPEED: Final = 0.02
+"""A joint carried away slower than this (rad/s) is creeping, not stalled."""
+
+BRAKE_FLOOR: Final = 0.1
+"""Share of a joint's torque limit its braking plans on at least, even where its load leaves
+it less at the pose it is in now."""
+
 BRAKE_SHARE: Final = 0.5
 """Share of a joint's spare torque the velocity profile plans to brake with: the rest is margin
 for the other joints moving at the same time, which the one-joint inertia does not see."""
@@ -83,6 +94,13 @@ class Servo:
         self._stalled = np.zeros(count, dtype=bool)
         self._saturated = np.zeros(count, dtype=bool)
         self._velocities = np.zeros(count)
+        self._carried = np.zeros(count)
+
+    def _room(self, torques: np.ndarray, hold: np.ndarray, share: float) -> np.ndarray:
+        """The ``share`` of each joint's torque left, beyond its ``hold`` load, on the side of
+        ``torques``; at least the floor, as for braking."""
+        left = self.max_torque - np.sign(torques) * hold
+        return share * np.maximum(left, BRAKE_FLOOR * self.max_torque)
 
     def retry(self) -> None:
         """Let joints that stalled at their torque limit push for their goals again: the target
@@ -107,19 +125,29 @@ class Servo:
         """
         pose = Pose(self.inertia, world_angles)
         hold = pose.loads(gravity=gravity)
-        spare = np.maximum(self.max_torque - np.abs(hold.torques), 0.0)
-        reach = spare / pose.inertia()
-        brake = BRAKE_SHARE * reach
+        inertia = pose.inertia()
+        # What each joint can change its velocity by, per second, either way: its load eats
+        # into the torque on one side and adds to it on the other (gravity helps a lowering).
+        up = np.maximum(self.max_torque - hold.torques, 0.0) / inertia
+        down = np.maximum(self.max_torque + hold.torques, 0.0) / inertia
+        # Braking toward the goal takes the other side's capacity. A joint held at its torque
+        # limit has none there at this pose, yet moving on changes its load; it plans with a
+        # floor so that it moves at all rather than stay where its torque ran out.
+        against = np.where(error > 0.0, down, up)
+        floor = BRAKE_FLOOR * self.max_torque / inertia
+        brake = BRAKE_SHARE * np.maximum(against, floor)
         # Anti-windup: a joint pushing at its limit yet carried away from its goal cannot get
         # there; it asks only to stop, until :meth:`retry`, so it comes to rest where its
         # torque runs out instead of swinging about that point like a pendulum. Carried away
-        # means moving from the goal faster than a tick ago: an overshoot that the motor is
-        # braking slows down instead, and is no stall.
-        self._stalled |= (
+        # means moving from the goal faster and faster for a while: an overshoot that the motor
+        # is braking slows down instead, and is no stall.
+        carried = (
             self._saturated
             & (velocities * error < 0.0)
-            & (np.abs(velocities) > np.abs(self._velocities))
+            & (np.abs(velocities) > np.maximum(np.abs(self._velocities), STALL_SPEED))
         )
+        self._carried = np.where(carried, self._carried + dt, 0.0)
+        self._stalled |= self._carried >= STALL_TIME
         self._velocities = velocities
         size = np.where(self._stalled, 0.0, np.abs(error))
         speed = np.minimum(
@@ -133,18 +161,18 @@ class Servo:
         moving = np.abs(closing) > 1e-9
         if np.any(moving):
             stop_in = float(np.min(2.0 * np.abs(error[moving]) / np.abs(closing[moving])))
-            halt = pose.loads(alpha=np.cumsum(-closing / stop_in))
-            closing = closing * _fit(np.abs(halt.torques), BRAKE_SHARE * spare)
+            halt = pose.loads(alpha=np.cumsum(-closing / stop_in)).torques
+            closing = closing * _fit(np.abs(halt), self._room(halt, hold.torques, BRAKE_SHARE))
         target = closing if goal_rates is None else closing + goal_rates
         target = np.clip(target, -self.max_speed, self.max_speed)
         # Joints of a long chain moving at once whip its far end round: the torques that merely
         # keep those velocities grow with their square. Slow every joint by one factor until
         # they fit in the share of spare torque that braking leaves.
-        spin = pose.loads(omega=np.cumsum(target))
-        target = target * _fit(np.abs(spin.torques), (1.0 - BRAKE_SHARE) * spare)
+        spin = pose.loads(omega=np.cumsum(target)).torques
+        target = target * _fit(np.abs(spin), self._room(spin, hold.torques, 1.0 - BRAKE_SHARE))
         # Approach that velocity no faster than each joint's spare torque allows: a servo that
         # asked for the whole change in one tick would saturate every motor after any knock.
-        wanted = np.clip(target, velocities - reach * dt, velocities + reach * dt)
+        wanted = np.clip(target, velocities - down * dt, velocities + up * dt)
         wanted_acceleration = (wanted - velocities) / dt
         push = pose.loads(alpha=np.cumsum(wanted_acceleration))
         drive = fit_drive(
