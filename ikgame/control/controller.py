@@ -81,7 +81,8 @@ class Controller:
     ) -> None:
         # Stalls (limits, coils, the long way round a stop) are recovered from, and a settled
         # chain's answer is cached, by one solver object that lives with the chain.
-        self._solver = RobustSolver(skeleton, solver)
+        self.solver = RobustSolver(skeleton, solver)
+        """The chain's solver, with recovery and a cache (see :class:`RobustSolver`)."""
         self.max_speed = np.asarray(max_speed, dtype=float)
         self.servo = servo
         self.gain = gain
@@ -108,20 +109,20 @@ class Controller:
     @property
     def skeleton(self) -> Skeleton:
         """The chain being driven; set it when the base moves."""
-        return self._solver.skeleton
+        return self.solver.skeleton
 
     @skeleton.setter
     def skeleton(self, skeleton: Skeleton) -> None:
-        self._solver.skeleton = skeleton
+        self.solver.skeleton = skeleton
 
     @property
     def solver_name(self) -> str:
         """The solver in use (``ccd``, ``jacobian_transpose``, ``dls``, ``fabrik``)."""
-        return self._solver.solver_name
+        return self.solver.solver_name
 
     def set_solver(self, name: str) -> None:
         """Switch solver from the next tick on (``ccd``, ``jacobian_transpose``, ``dls``, ``fabrik``)."""
-        self._solver.solver_name = name
+        self.solver.solver_name = name
 
     def _goal_rates(
         self, measured: np.ndarray, target: np.ndarray | None, dt: float
@@ -155,7 +156,7 @@ class Controller:
         self._held = self.skeleton.clamp(np.asarray(measured, dtype=float).copy())
         self._holding = True
         # A cached answer is one the chain could not get to: solve afresh when released.
-        self._solver.reset()
+        self.solver.reset()
 
     def release(self) -> None:
         """Solve toward the target again after :meth:`hold`."""
@@ -187,7 +188,7 @@ class Controller:
             solution = Solution(self._held, SolveStatus.SUCCESS, 0, 0.0)
         else:
             start = np.where(self._limited, measured, [wrap_angle(a) for a in measured])
-            solution = self._solver.solve(
+            solution = self.solver.solve(
                 start, target, max_iterations=self.iterations, tolerance=self.arrival
             )
             self._held = solution.angles

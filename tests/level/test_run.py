@@ -106,19 +106,28 @@ def test_props_fall_onto_obstacles_and_reach_the_snapshots_and_the_scene():
     assert final[1, 1] == pytest.approx(-16.0 + 10.0, abs=0.5)
 
 
-def test_the_chain_pushes_a_prop():
-    level = _level(
-        [
-            {"sequence": [[80.0, 120.0], [90.0, 15.0]], "tolerance": 10.0, "hold": 0.2},
-            {"reach": [280.0, 15.0], "timeout": 2.0},
-        ],
-        props=[{"kind": "ball", "name": "ball", "position": [150.0, 0.0], "radius": 15.0}],
-        obstacles=FLOOR,
-        world={"gravity": [0.0, -900.0]},
-    )
-    sim = Simulation(level, record=False)
-    sim.run()
-    assert sim.world.prop_states()[0, 0] > 200.0  # pushed 50 px on
+def test_the_chain_pushes_a_prop_and_says_when_the_floor_jams_it():
+    def sweep(base_height):
+        level = _level(
+            [
+                {"sequence": [[80.0, 120.0], [90.0, 15.0]], "tolerance": 10.0, "hold": 0.2},
+                {"reach": [280.0, 15.0], "timeout": 2.0},
+            ],
+            props=[{"kind": "ball", "name": "ball", "position": [150.0, 0.0], "radius": 15.0}],
+            obstacles=FLOOR,
+            world={"gravity": [0.0, -900.0]},
+            chain={"base": [0.0, base_height]},
+        )
+        sim = Simulation(level, record=False)
+        sim.run()
+        return sim
+
+    # Mounted 50 px up, the arm sweeps along the floor and knocks the ball on.
+    assert sweep(50.0).world.prop_states()[0, 0] > 200.0
+    # Mounted on the floor, unfolding toward the far target presses the tip into the floor,
+    # where friction holds it: the chain stops pushing and says so.
+    jammed = sweep(0.0).result.steps[-1]
+    assert not jammed.passed and "blocked" in jammed.note
 
 
 def test_goals_are_judged_at_the_end_with_their_hold_and_scored():
