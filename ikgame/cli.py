@@ -2,6 +2,10 @@
 
 Exit codes: 0 when the command did its job (a level that fails its script still ran fine),
 2 for bad input (a level file, an option), 1 for an internal error.
+
+Start-up time is most of a short command's time, so this module imports at the top only what
+building the parser needs; each command imports its own modules (the simulation, Pillow, rich,
+the comparison) when it runs, and ``ikgame --version`` loads none of them.
 """
 
 from __future__ import annotations
@@ -11,22 +15,18 @@ import re
 import sys
 from collections.abc import Sequence
 from pathlib import Path
-
-from rich.console import Console
-from rich.markup import escape
-from rich.table import Table
+from typing import TYPE_CHECKING
 
 import ikgame
-from ikgame._files import write_atomic, write_json
-from ikgame._progress import progress_bar
-from ikgame.compare import compare_level, comparison_table, write_comparison
 from ikgame.level.library import DEFAULT_LEVEL, resolve_level
-from ikgame.level.loader import LevelError, Problem, level_theme, load_level
-from ikgame.level.model import SOLVER_NAMES, Level
-from ikgame.level.tools import level_rows, schema_text, validate_files
-from ikgame.render.export import check_out_dir, export_run, parse_size
-from ikgame.render.theme import available_themes, load_theme
-from ikgame.sim import RunResult, Simulation
+from ikgame.level.names import SOLVER_NAMES
+from ikgame.render.theme import available_themes
+
+if TYPE_CHECKING:
+    from rich.console import Console
+
+    from ikgame.level.model import Level
+    from ikgame.sim import RunResult
 
 __all__ = ["main"]
 
@@ -64,27 +64,38 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line with ``argv`` (default: ``sys.argv[1:]``); returns the exit code."""
     parser = _parser()
     args = parser.parse_args(argv)
-    err = Console(stderr=True, highlight=False)
     try:
         return args.handler(args)
-    except LevelError as exc:
+    except (Exception, KeyboardInterrupt) as exc:
+        return _report(exc, debug=getattr(args, "debug", False))
+
+
+def _report(exc: BaseException, *, debug: bool) -> int:
+    """Print what went wrong on stderr and return the exit code; re-raise with ``debug``."""
+    from rich.console import Console
+    from rich.markup import escape
+
+    from ikgame.level.loader import LevelError
+
+    err = Console(stderr=True, highlight=False)
+    if isinstance(exc, LevelError):
         for problem in exc.problems:
             err.print(f"[bold red]error:[/] {escape(str(problem))}", soft_wrap=True)
         return EXIT_BAD_INPUT
-    except UsageError as exc:
+    if isinstance(exc, UsageError):
         err.print(f"[bold red]error:[/] {escape(str(exc))}", soft_wrap=True)
         return EXIT_BAD_INPUT
-    except KeyboardInterrupt:
+    if isinstance(exc, KeyboardInterrupt):
         err.print("interrupted")
         return 130
-    except Exception as exc:  # the last line of defence: report, never a bare traceback
-        if getattr(args, "debug", False):
-            raise
-        err.print(
-            f"[bold red]internal error:[/] {type(exc).__name__}: {escape(str(exc))}", soft_wrap=True
-        )
-        err.print("rerun with --debug for the traceback, and please report it.")
-        return EXIT_INTERNAL
+    # The last line of defence: report, never a bare traceback.
+    if debug:
+        raise exc
+    err.print(
+        f"[bold red]internal error:[/] {type(exc).__name__}: {escape(str(exc))}", soft_wrap=True
+    )
+    err.print("rerun with --debug for the traceback, and please report it.")
+    return EXIT_INTERNAL
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -197,6 +208,15 @@ def _slug(name: str) -> str:
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
+    from rich.console import Console
+
+    from ikgame._files import write_json
+    from ikgame._progress import progress_bar
+    from ikgame.level.loader import load_level
+    from ikgame.render.output import check_out_dir, parse_size
+    from ikgame.render.theme import load_theme
+    from ikgame.sim import Simulation
+
     level_path = resolve_level(args.level)
     level = load_level(level_path)
     out = args.out if args.out is not None else Path("runs") / _slug(level.level.name)
@@ -218,6 +238,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
         result = sim.run(update)
     written = []
     if not args.no_frames:
+        from ikgame.render.export import export_run
+
         written = export_run(
             out,
             sim.scene,
@@ -236,6 +258,14 @@ def _cmd_run(args: argparse.Namespace) -> int:
 
 
 def _cmd_compare(args: argparse.Namespace) -> int:
+    from rich.console import Console
+    from rich.markup import escape
+
+    from ikgame._progress import progress_bar
+    from ikgame.compare import compare_level, comparison_table, write_comparison
+    from ikgame.level.loader import load_level
+    from ikgame.render.output import check_out_dir
+
     level = load_level(resolve_level(args.level))
     # Order kept, repeats dropped: "ccd,dls,ccd" compares two solvers.
     solvers = list(dict.fromkeys(name.strip() for name in args.solvers.split(",") if name.strip()))
@@ -258,6 +288,11 @@ def _cmd_compare(args: argparse.Namespace) -> int:
 
 
 def _cmd_validate(args: argparse.Namespace) -> int:
+    from rich.console import Console
+
+    from ikgame.level.loader import LevelError
+    from ikgame.level.tools import validate_files
+
     console = Console(quiet=args.quiet, highlight=False)
     paths = [resolve_level(name) for name in args.files]
     problems = validate_files(paths)
@@ -269,6 +304,11 @@ def _cmd_validate(args: argparse.Namespace) -> int:
 
 
 def _cmd_list(args: argparse.Namespace) -> int:
+    from rich.console import Console
+    from rich.markup import escape
+
+    from ikgame.level.tools import level_rows
+
     console = Console(highlight=False)
     for row in level_rows():
         ends = "" if row["expect"] == "passed" else f", meant to end {row['expect']}"
@@ -282,6 +322,9 @@ def _cmd_list(args: argparse.Namespace) -> int:
 
 
 def _cmd_schema(args: argparse.Namespace) -> int:
+    from ikgame._files import write_atomic
+    from ikgame.level.tools import schema_text
+
     text = schema_text()
     if args.out is None:
         sys.stdout.write(text)
@@ -292,6 +335,8 @@ def _cmd_schema(args: argparse.Namespace) -> int:
 
 def _level_theme(level: Level, level_path: Path) -> str | Path | None:
     """The level's own theme, with a bad one reported like any other level problem."""
+    from ikgame.level.loader import LevelError, Problem, level_theme
+
     try:
         return level_theme(level, level_path)
     except ValueError as exc:
@@ -312,6 +357,8 @@ class _usage:
         return None
 
     def __exit__(self, kind: type | None, exc: BaseException | None, tb: object) -> bool:
+        from ikgame.level.loader import LevelError
+
         if isinstance(exc, ValueError) and not isinstance(exc, UsageError | LevelError):
             raise UsageError(f"{self.option}: {exc}") from None
         return False
@@ -326,6 +373,9 @@ def _results(result: RunResult, level_path: Path, args: argparse.Namespace) -> d
 
 
 def _print_summary(console: Console, result: RunResult, out: Path, written: list[Path]) -> None:
+    from rich.markup import escape
+    from rich.table import Table
+
     colour = {"passed": "green", "failed": "yellow", "diverged": "red"}[result.status]
     expected = (
         "" if result.status == result.expect else f" [dim](designed to end {result.expect})[/]"

@@ -77,6 +77,37 @@ def test_console_script_runs_as_a_module(tmp_path):
     assert "Traceback" not in proc.stderr
 
 
+def _modules_loaded_by(code: str, cwd: Path) -> set[str]:
+    """The modules a fresh interpreter has imported after running ``code``."""
+    script = f"import sys\n{code}\nprint(' '.join(sorted(sys.modules)))"
+    proc = subprocess.run(
+        [sys.executable, "-c", script], capture_output=True, text=True, cwd=cwd, check=True
+    )
+    return set(proc.stdout.split())
+
+
+# What each command must not pay for at start-up: drawing, plotting, the comparison, rich.
+HEAVY = {"PIL", "ikgame.compare", "ikgame.render.plot", "ikgame.render.export", "rich"}
+
+
+def test_version_loads_neither_the_simulation_nor_drawing(tmp_path):
+    loaded = _modules_loaded_by(
+        "from ikgame.cli import main\ntry:\n    main(['--version'])\nexcept SystemExit:\n    pass",
+        tmp_path,
+    )
+    assert "ikgame.cli" in loaded
+    assert not loaded & (HEAVY | {"numpy", "pydantic", "pymunk", "ikgame.sim"})
+
+
+def test_run_without_frames_loads_no_drawing(tmp_path):
+    out = tmp_path / "run"
+    code = f"from ikgame.cli import main\nassert main(['run', '--no-frames', '--quiet', '--out', {str(out)!r}]) == 0"
+    loaded = _modules_loaded_by(code, tmp_path)
+    assert (out / "results.json").exists()
+    assert "ikgame.sim" in loaded
+    assert not loaded & (HEAVY - {"rich"})
+
+
 def test_run_writes_frames_gif_and_motion_that_show_the_chain_moving(tmp_path):
     from PIL import Image, ImageChops
 

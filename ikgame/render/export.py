@@ -35,15 +35,13 @@ from ikgame._files import atomic_open, write_atomic
 from ikgame._progress import progress_bar
 from ikgame.render.animation import ApngWriter, GifWriter, build_palette, gif_durations, quantizer
 from ikgame.render.camera import Camera
+from ikgame.render.output import check_export_size, check_out_dir, parse_size
 from ikgame.render.pillow import render_snapshot
 from ikgame.render.theme import Theme, load_theme
 from ikgame.snapshot import Scene, Snapshot
 
 __all__ = ["check_out_dir", "export_run", "motion_json", "parse_size", "trail_at"]
 
-MIN_SIDE = 16  # px: below this the HUD and markers cannot fit
-MAX_SIDE = 3840  # px, either side
-MAX_PIXELS = 3840 * 2160  # a 4K frame; more is a typo or a hostile level, not a devlog GIF
 TRAIL_SECONDS = 1.5  # s of end-effector path drawn behind it
 GIF_MAX_FPS = 50.0  # browsers play GIF delays under 2 cs as 10 cs, so faster runs drop frames
 SHEET_THUMBS = 12
@@ -53,57 +51,9 @@ CHUNK = 8  # frames per worker task: large enough to amortise the round trip, sm
 PARALLEL_MIN_FRAMES = 48  # shorter runs finish before worker processes would have started
 MAX_AUTO_WORKERS = 8
 _FRAME_NAME = re.compile(r"\d{6}\.png")
-_SIZE = re.compile(r"(-?\d+)\s*[xX]\s*(-?\d+)")
 
 
 # -- input checks --------------------------------------------------------------------------------
-
-
-def parse_size(text: str) -> tuple[int, int]:
-    """Parse ``"WIDTHxHEIGHT"`` into ``(width, height)``, within the export size limits.
-
-    >>> parse_size("960x540")
-    (960, 540)
-    """
-    match = _SIZE.fullmatch(text.strip()) if isinstance(text, str) else None
-    if match is None:
-        raise ValueError(f"size must be WIDTHxHEIGHT in pixels, like 960x540; got {text!r}")
-    return _check_export_size((int(match[1]), int(match[2])))
-
-
-def _check_export_size(size: object) -> tuple[int, int]:
-    try:
-        width, height = size  # type: ignore[misc]
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"size must be a pair (width, height), got {size!r}") from exc
-    if any(isinstance(v, bool) or not isinstance(v, int | np.integer) for v in (width, height)):
-        raise ValueError(f"size must be whole pixels (width, height), got {size!r}")
-    if not (
-        MIN_SIDE <= width <= MAX_SIDE
-        and MIN_SIDE <= height <= MAX_SIDE
-        and width * height <= MAX_PIXELS
-    ):
-        raise ValueError(
-            f"size {width}x{height} is out of range: each side must be {MIN_SIDE}..{MAX_SIDE} px "
-            f"and the frame at most {MAX_PIXELS} pixels (3840x2160)"
-        )
-    return int(width), int(height)
-
-
-def check_out_dir(path: str | os.PathLike[str], force: bool) -> Path:
-    """Return ``path`` as a Path if an export may write there, or raise ``ValueError``.
-
-    A missing or empty folder is fine; a folder with files in it only with ``force``.
-
-    >>> check_out_dir("runs/not-there-yet", force=False).name
-    'not-there-yet'
-    """
-    out = Path(path)
-    if out.exists() and not out.is_dir():
-        raise ValueError(f"output path {out} exists and is not a folder")
-    if out.is_dir() and not force and any(out.iterdir()):
-        raise ValueError(f"output folder {out} is not empty; use --force to overwrite its files")
-    return out
 
 
 def _check_run(scene: Scene, snapshots: Sequence[Snapshot]) -> None:
@@ -425,7 +375,7 @@ def export_run(
     """
     snapshots = tuple(snapshots)
     _check_run(scene, snapshots)
-    size = _check_export_size(size)
+    size = check_export_size(size)
     resolved_theme = theme if isinstance(theme, Theme) else load_theme(theme)
     workers = _worker_count(workers, len(snapshots))
     out = Path(out_dir)

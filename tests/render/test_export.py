@@ -13,7 +13,7 @@ import pytest
 from PIL import Image
 
 from ikgame.render import export
-from ikgame.render.export import check_out_dir, export_run, motion_json, parse_size
+from ikgame.render.export import export_run, motion_json
 
 SIZE = (160, 90)
 
@@ -124,44 +124,6 @@ def test_re_export_removes_frames_of_a_longer_earlier_run(tmp_path, run):
     _export(tmp_path, scene, snaps[:2], gif=False, motion=False)
     names = sorted(p.name for p in (tmp_path / "frames").iterdir())
     assert names == ["000000.png", "000001.png", "notes.txt"]
-
-
-def test_check_out_dir_refuses_a_non_empty_folder_unless_forced(tmp_path):
-    assert check_out_dir(tmp_path / "new", force=False) == tmp_path / "new"
-    assert check_out_dir(tmp_path, force=False) == tmp_path
-    (tmp_path / "old.png").write_bytes(b"")
-    with pytest.raises(ValueError, match="is not empty"):
-        check_out_dir(tmp_path, force=False)
-    assert check_out_dir(tmp_path, force=True) == tmp_path
-    with pytest.raises(ValueError, match="not a folder"):
-        check_out_dir(tmp_path / "old.png", force=True)
-
-
-def test_parse_size_accepts_sizes_in_range():
-    assert parse_size("960x540") == (960, 540)
-    assert parse_size(" 1080X1920 ") == (1080, 1920)
-    assert parse_size("3840x2160") == (3840, 2160)
-    assert parse_size("16x16") == (16, 16)
-
-
-@pytest.mark.parametrize(
-    "text, message",
-    [
-        ("0x0", "out of range"),
-        ("-5x3", "out of range"),
-        ("15x100", "out of range"),
-        ("3841x100", "out of range"),
-        ("3840x3840", "out of range"),
-        ("abc", "WIDTHxHEIGHT"),
-        ("960x", "WIDTHxHEIGHT"),
-        ("960x540x3", "WIDTHxHEIGHT"),
-        ("9.5x4", "WIDTHxHEIGHT"),
-        ("", "WIDTHxHEIGHT"),
-    ],
-)
-def test_parse_size_rejects_bad_sizes(text, message):
-    with pytest.raises(ValueError, match=message):
-        parse_size(text)
 
 
 def test_bad_export_arguments_raise(tmp_path, run):
