@@ -142,6 +142,14 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument(
         "--workers", type=int, metavar="N", help="processes drawing frames (default: automatic)"
     )
+    run.add_argument(
+        "--png-compression",
+        type=int,
+        default=1,
+        choices=range(10),
+        metavar="LEVEL",
+        help="zlib level 0..9 of the PNG files: 1 (default) is fast, 9 makes them smaller",
+    )
     run.set_defaults(handler=_cmd_run)
 
     compare = sub.add_parser(
@@ -251,6 +259,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
             sheet=args.sheet,
             workers=args.workers,
             progress=_interactive(console),
+            png_compression=args.png_compression,
         )
     written.append(write_json(out / "results.json", _results(result, level_path, args)))
     _print_summary(console, result, out, written)

@@ -139,6 +139,18 @@ def test_two_runs_give_byte_identical_frames(tmp_path):
     assert all(x.read_bytes() == y.read_bytes() for x, y in zip(a, b, strict=True))
 
 
+def test_png_compression_reaches_the_frames_and_is_checked(tmp_path, capsys):
+    out = tmp_path / "run"
+    args = ["run", "--quiet", "--size", "160x90", "--no-gif", "--workers", "1", "--out", str(out)]
+    assert main([*args, "--png-compression", "0"]) == 0
+    # Level 0 stores the pixels uncompressed: a filter byte per row plus 3 bytes per pixel.
+    assert (out / "frames/000000.png").stat().st_size > 90 * (1 + 160 * 3)
+    with pytest.raises(SystemExit) as exc:
+        main([*args, "--force", "--png-compression", "10"])
+    assert exc.value.code == 2
+    assert "--png-compression" in capsys.readouterr().err
+
+
 @pytest.mark.parametrize(
     ("option", "message"),
     [

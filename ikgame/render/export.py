@@ -12,7 +12,6 @@ by :mod:`ikgame.render.animation`, while this module decides what goes into them
 
 from __future__ import annotations
 
-import io
 import json
 import math
 import multiprocessing
@@ -26,7 +25,7 @@ from concurrent.futures import Future, ProcessPoolExecutor
 from contextlib import ExitStack, contextmanager
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import IO, Any
 
 import numpy as np
 from PIL import Image, ImageDraw, ImageFont
@@ -37,6 +36,7 @@ from ikgame.render.animation import ApngWriter, GifWriter, build_palette, gif_du
 from ikgame.render.camera import Camera
 from ikgame.render.output import check_export_size, check_out_dir, parse_size
 from ikgame.render.pillow import render_snapshot
+from ikgame.render.png import check_compress_level, png_bytes
 from ikgame.render.theme import Theme, load_theme
 from ikgame.snapshot import Scene, Snapshot
 
@@ -50,6 +50,7 @@ SHEET_THUMB_WIDTH = 320  # px, at most
 CHUNK = 8  # frames per worker task: large enough to amortise the round trip, small to balance
 PARALLEL_MIN_FRAMES = 48  # shorter runs finish before worker processes would have started
 MAX_AUTO_WORKERS = 8
+PNG_COMPRESSION = 1  # zlib level of PNG files: fast; 9 makes them about a third smaller
 _FRAME_NAME = re.compile(r"\d{6}\.png")
 
 
@@ -80,6 +81,11 @@ def motion_json(scene: Scene, snapshots: Sequence[Snapshot]) -> dict[str, Any]:
     >>> motion["link_lengths"], motion["frames"][0]["angles_deg"]
     ([100.0], [90.0002])
     """
+    return _motion_header(scene, snapshots) | {"frames": [_motion_frame(s) for s in snapshots]}
+
+
+def _motion_header(scene: Scene, snapshots: Sequence[Snapshot]) -> dict[str, Any]:
+    """Everything in :func:`motion_json` but the frames."""
     _check_run(scene, snapshots)
     first = np.asarray(snapshots[0].joints, dtype=float)
     lengths = np.linalg.norm(np.diff(first, axis=0), axis=1)
@@ -99,7 +105,6 @@ def motion_json(scene: Scene, snapshots: Sequence[Snapshot]) -> dict[str, Any]:
         "link_count": len(lengths),
         "link_lengths": [_round(v, 3) for v in lengths],
         "link_widths": [_round(v, 3) for v in np.asarray(scene.link_widths, dtype=float)],
-        "frames": [_motion_frame(snap) for snap in snapshots],
     }
 
 
@@ -126,12 +131,15 @@ def _round(value: float, digits: int) -> float:
     return round(float(value), digits) + 0.0
 
 
-def _motion_bytes(motion: dict[str, Any]) -> bytes:
-    """The motion as JSON: an indented header, then one line per frame so runs diff well."""
-    header = {key: value for key, value in motion.items() if key != "frames"}
-    head = json.dumps(header, indent=2, allow_nan=False)
-    frames = ",\n    ".join(json.dumps(f, allow_nan=False) for f in motion["frames"])
-    return f'{head[:-2]},\n  "frames": [\n    {frames}\n  ]\n}}\n'.encode()
+def _write_motion(fp: IO[bytes], scene: Scene, snapshots: Sequence[Snapshot]) -> None:
+    """Write :func:`motion_json` as JSON: an indented header, then one line per frame so runs
+    diff well. Streamed a frame at a time: a long run's keyframes are never all in memory."""
+    head = json.dumps(_motion_header(scene, snapshots), indent=2, allow_nan=False)
+    fp.write(f'{head[:-2]},\n  "frames": [\n    '.encode())
+    for index, snap in enumerate(snapshots):
+        separator = ",\n    " if index else ""
+        fp.write((separator + json.dumps(_motion_frame(snap), allow_nan=False)).encode())
+    fp.write(b"\n  ]\n}\n")
 
 
 # -- one frame -----------------------------------------------------------------------------------
@@ -161,6 +169,7 @@ class _Job:
     theme: Theme
     png: bool  # encode PNG bytes (frames or APNG)
     gif_stride: int  # every gif_stride-th frame goes into the GIF; 0 without a GIF
+    png_compression: int = PNG_COMPRESSION  # zlib level: 1 fast .. 9 small
 
     def render(self, index: int, hud: bool = True) -> Image.Image:
         trail = trail_at(self.snapshots, index, self.scene.fps)
@@ -176,17 +185,11 @@ class _Job:
     def payload(self, index: int, palette: bytes | None) -> tuple[bytes | None, bytes | None]:
         """Frame ``index`` as PNG bytes and as GIF palette indices (None where not wanted)."""
         image = self.render(index)
-        png = _png_bytes(image) if self.png else None
+        png = png_bytes(image, self.png_compression) if self.png else None
         indices = None
         if palette is not None and index % self.gif_stride == 0:
             indices = quantizer(palette).indices(image)
         return png, indices
-
-
-def _png_bytes(image: Image.Image) -> bytes:
-    buffer = io.BytesIO()
-    image.save(buffer, format="PNG")
-    return buffer.getvalue()
 
 
 # -- worker processes ------------------------------------------------------------------------------
@@ -353,6 +356,7 @@ def export_run(
     motion: bool = True,
     workers: int | None = None,
     progress: bool = True,
+    png_compression: int = PNG_COMPRESSION,
 ) -> list[Path]:
     """Write a run's files into ``out_dir`` (created if missing) and return their paths.
 
@@ -360,6 +364,8 @@ def export_run(
     palette and delays that add up to the run's length (runs above 50 fps keep every 2nd, 3rd...
     frame, as browsers slow faster GIFs down); ``run.png`` an APNG at the exact frame rate;
     ``sheet.png`` a contact sheet of about 12 frames; ``motion.json`` (see :func:`motion_json`).
+    ``png_compression`` is the zlib level of the PNG files, 0..9: the default 1 is fast, 9 makes
+    files about a third smaller and the export slower.
     ``workers`` processes draw the frames (None: one per CPU for long runs, else 1); the files
     are the same byte for byte whatever the count. Workers are spawned, so, as always with
     multiprocessing, a calling script needs an ``if __name__ == "__main__":`` guard. Frame files left from an earlier, longer run
@@ -376,6 +382,7 @@ def export_run(
     snapshots = tuple(snapshots)
     _check_run(scene, snapshots)
     size = check_export_size(size)
+    check_compress_level(png_compression)
     resolved_theme = theme if isinstance(theme, Theme) else load_theme(theme)
     workers = _worker_count(workers, len(snapshots))
     out = Path(out_dir)
@@ -388,19 +395,25 @@ def export_run(
         theme=resolved_theme,
         png=frames or apng,
         gif_stride=stride,
+        png_compression=png_compression,
     )
     samples = _sample_indices(len(snapshots), SHEET_THUMBS)
     show_progress = progress and sys.stderr.isatty()
     try:
         written = _write_frames(out, job, workers, samples, frames, gif, apng, show_progress)
     finally:
-        # The colour table is 32 MB: keep it no longer than the export that needed it.
+        # The colour table is 16 MB: keep it no longer than the export that needed it.
         quantizer.cache_clear()
     if sheet:
-        written.append(write_atomic(out / "sheet.png", _png_bytes(_contact_sheet(job, samples))))
+        written.append(
+            write_atomic(
+                out / "sheet.png", png_bytes(_contact_sheet(job, samples), job.png_compression)
+            )
+        )
     if motion:
-        data = _motion_bytes(motion_json(scene, snapshots))
-        written.append(write_atomic(out / "motion.json", data))
+        with atomic_open(out / "motion.json") as fp:
+            _write_motion(fp, scene, snapshots)
+        written.append(out / "motion.json")
     return written
 
 

@@ -91,6 +91,29 @@ def test_motion_json_holds_every_frame(tmp_path, run):
     assert frame["torque_limited"] == snap.torque_limited.tolist()
 
 
+def test_motion_json_is_an_indented_header_then_one_line_per_frame(tmp_path, run):
+    scene, snaps = run(3)
+    _export(tmp_path, scene, snaps, frames=False, gif=False)
+    text = (tmp_path / "motion.json").read_text()
+    motion = motion_json(scene, snaps)
+    frames = motion.pop("frames")
+    head = json.dumps(motion, indent=2)
+    lines = [json.dumps(frame) for frame in frames]
+    assert text == f'{head[:-2]},\n  "frames": [\n    ' + ",\n    ".join(lines) + "\n  ]\n}\n"
+
+
+def test_png_compression_trades_time_for_size_not_pixels(tmp_path, run):
+    scene, snaps = run(2)
+    _export(tmp_path / "fast", scene, snaps, gif=False, motion=False)
+    _export(tmp_path / "small", scene, snaps, gif=False, motion=False, png_compression=9)
+    fast, small = tmp_path / "fast/frames/000001.png", tmp_path / "small/frames/000001.png"
+    assert small.stat().st_size < fast.stat().st_size
+    with Image.open(fast) as a, Image.open(small) as b:
+        assert a.tobytes() == b.tobytes()
+    with pytest.raises(ValueError, match="compress_level"):
+        _export(tmp_path / "bad", scene, snaps, png_compression=10)
+
+
 def test_motion_json_writes_missing_values_as_null(run):
     scene, snaps = run(2, targets=np.zeros((0, 2)))
     frame = motion_json(scene, snaps)["frames"][0]
