@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import math
 import struct
+from collections import Counter
 from collections.abc import Sequence
 from fractions import Fraction
 from functools import lru_cache
@@ -42,9 +43,12 @@ def build_palette(samples: Sequence[Image.Image], theme: Theme) -> bytes:
     map to themselves with no dithering; the rest of the entries adapt (median cut) to the
     remaining pixels: anti-aliased edges, the trail's fade, text.
     """
-    stacked = Image.fromarray(np.vstack([np.asarray(im.convert("RGB")) for im in samples]))
-    counts = stacked.getcolors(stacked.width * stacked.height) or []
-    counts.sort(key=lambda item: (-item[0], item[1]))
+    # Counted sample by sample and added up, rather than stacked into one tall image first.
+    totals: Counter[tuple[int, int, int]] = Counter()
+    for image in samples:
+        rgb = image.convert("RGB")
+        totals.update({c: n for n, c in rgb.getcolors(rgb.width * rgb.height) or []})
+    counts = sorted(((n, rgb) for rgb, n in totals.items()), key=lambda item: (-item[0], item[1]))
     fixed = list(dict.fromkeys(theme.colors() + [rgb for _, rgb in counts[:GIF_FREQUENT]]))
     fixed = fixed[:GIF_COLORS]
     taken = set(fixed)
@@ -74,12 +78,12 @@ class _Quantizer:
     a table filled as colours first appear (frames reuse almost all of them).
     """
 
-    # The GIF's transparent index, which no colour maps to, marks colours not looked up yet.
-    _UNKNOWN = GIF_TRANSPARENT
-
     def __init__(self, palette: bytes) -> None:
         self.colors = np.frombuffer(palette, dtype=np.uint8).reshape(-1, 3).astype(np.int32)
-        self.table = np.full(1 << 24, self._UNKNOWN, dtype=np.uint8)  # 16 MB
+        # Index + 1 per colour, 0 for colours not looked up yet: a zeroed table is memory the
+        # system hands out untouched, so only the pages of colours that occur take up room
+        # (a few MB, where a table filled with a marker would be 16 MB in every process).
+        self.table = np.zeros(1 << 24, dtype=np.uint8)
 
     def indices(self, image: Image.Image) -> bytes:
         # RGBX is Pillow's own layout: one little-endian uint32 per pixel, R in the low byte,
@@ -87,11 +91,12 @@ class _Quantizer:
         rgbx = image.convert("RGB").tobytes("raw", "RGBX")
         packed = np.frombuffer(rgbx, dtype="<u4") & 0xFFFFFF
         found = self.table[packed]
-        missing = found == self._UNKNOWN
+        missing = found == 0
         if missing.any():
             new = np.unique(packed[missing])
-            self.table[new] = self._nearest(new)
+            self.table[new] = self._nearest(new) + 1
             found = self.table[packed]
+        found -= 1
         return found.tobytes()
 
     def _nearest(self, packed: np.ndarray) -> np.ndarray:
@@ -109,8 +114,8 @@ class _Quantizer:
 @lru_cache(maxsize=1)
 def quantizer(palette: bytes) -> _Quantizer:
     """The quantizer for ``palette``: one per palette and process, so its table fills once per
-    export (in each worker too). The table is 16 MB: call ``quantizer.cache_clear()`` when the
-    export is done."""
+    export (in each worker too). Its table takes a few MB: call ``quantizer.cache_clear()`` when
+    the export is done."""
     return _Quantizer(palette)
 
 

@@ -23,7 +23,7 @@ from collections import deque
 from collections.abc import Iterator, Sequence
 from concurrent.futures import Future, ProcessPoolExecutor
 from contextlib import ExitStack, contextmanager
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import IO, Any
 
@@ -155,13 +155,20 @@ def trail_at(snapshots: Sequence[Snapshot], index: int, fps: float) -> np.ndarra
     >>> trail_at(snaps, 2, 30.0).tolist()
     [[0.0, 1.0], [1.0, 1.0], [2.0, 1.0]]
     """
-    start = max(0, index - max(1, round(TRAIL_SECONDS * fps)))
+    start = max(0, index - _trail_frames(fps))
     return np.array([snap.joints[-1] for snap in snapshots[start : index + 1]], dtype=float)
+
+
+def _trail_frames(fps: float) -> int:
+    """How many frames back a frame's trail reaches."""
+    return max(1, round(TRAIL_SECONDS * fps))
 
 
 @dataclass(frozen=True)
 class _Job:
-    """Everything needed to draw any frame of a run; sent once to each worker process."""
+    """Everything needed to draw the frames of a run, or of a window of it: ``snapshots`` are
+    the frames from index ``first`` on. Worker processes get the job once without snapshots,
+    then each task the window it draws (see :meth:`window`), so a worker never holds the run."""
 
     scene: Scene
     snapshots: tuple[Snapshot, ...]
@@ -170,12 +177,20 @@ class _Job:
     png: bool  # encode PNG bytes (frames or APNG)
     gif_stride: int  # every gif_stride-th frame goes into the GIF; 0 without a GIF
     png_compression: int = PNG_COMPRESSION  # zlib level: 1 fast .. 9 small
+    first: int = 0  # frame index of snapshots[0]
+
+    def window(self, start: int, stop: int) -> _Job:
+        """The job for frames ``start`` to ``stop`` only: their snapshots and their trails'."""
+        first = max(0, start - _trail_frames(self.scene.fps))
+        window = self.snapshots[first - self.first : stop - self.first]
+        return replace(self, snapshots=window, first=first)
 
     def render(self, index: int, hud: bool = True) -> Image.Image:
-        trail = trail_at(self.snapshots, index, self.scene.fps)
+        local = index - self.first
+        trail = trail_at(self.snapshots, local, self.scene.fps)
         return render_snapshot(
             self.scene,
-            self.snapshots[index],
+            self.snapshots[local],
             self.camera,
             self.theme,
             trail=trail,
@@ -203,18 +218,20 @@ def _init_worker(job: _Job) -> None:
 
 
 def _worker_payloads(
-    start: int, stop: int, palette: bytes | None
+    snapshots: tuple[Snapshot, ...], first: int, start: int, stop: int, palette: bytes | None
 ) -> list[tuple[bytes | None, ...]]:
     assert _WORKER_JOB is not None, "worker used without _init_worker"
-    payloads = [_WORKER_JOB.payload(i, palette) for i in range(start, stop)]
+    job = replace(_WORKER_JOB, snapshots=snapshots, first=first)
+    payloads = [job.payload(i, palette) for i in range(start, stop)]
     # Palette indices are a byte per pixel but mostly runs: compressed they are ~5% of the
     # size, both in the pipe to the main process and in results queued for their turn.
     return [(png, None if idx is None else zlib.compress(idx, 1)) for png, idx in payloads]
 
 
-def _worker_rgb(index: int) -> bytes:
+def _worker_rgb(snapshots: tuple[Snapshot, ...], first: int, index: int) -> bytes:
     assert _WORKER_JOB is not None, "worker used without _init_worker"
-    return _WORKER_JOB.render(index).tobytes()
+    job = replace(_WORKER_JOB, snapshots=snapshots, first=first)
+    return job.render(index).tobytes()
 
 
 def _main_importable() -> bool:
@@ -231,7 +248,8 @@ def _worker_count(workers: int | None, frames: int) -> int:
     if workers is None:
         if frames < PARALLEL_MIN_FRAMES or not _main_importable():
             return 1
-        return max(1, min(os.cpu_count() or 1, MAX_AUTO_WORKERS))
+        # This process is a stage of the pipeline too (GIF, file writes): one core stays its own.
+        return max(1, min((os.cpu_count() or 1) - 1, MAX_AUTO_WORKERS))
     if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
         raise ValueError(f"workers must be a positive int or None, got {workers!r}")
     if workers > 1 and not _main_importable():
@@ -253,7 +271,7 @@ def _pool(job: _Job, workers: int) -> Iterator[ProcessPoolExecutor | None]:
         workers,
         mp_context=multiprocessing.get_context("spawn"),
         initializer=_init_worker,
-        initargs=(job,),
+        initargs=(replace(job, snapshots=()),),
     )
     try:
         yield pool
@@ -276,7 +294,11 @@ def _payloads(
     def submit() -> None:
         start = next(chunks, None)
         if start is not None:
-            pending.append(pool.submit(_worker_payloads, start, min(start + CHUNK, count), palette))
+            stop = min(start + CHUNK, count)
+            window = job.window(start, stop)
+            pending.append(
+                pool.submit(_worker_payloads, window.snapshots, window.first, start, stop, palette)
+            )
 
     # A couple of chunks queued per worker keeps them busy while bounding frames held in memory.
     for _ in range(2 * workers):
@@ -293,7 +315,11 @@ def _sample_images(
 ) -> list[Image.Image]:
     if pool is None:
         return [job.render(i) for i in indices]
-    return [Image.frombytes("RGB", job.camera.size, raw) for raw in pool.map(_worker_rgb, indices)]
+    windows = [job.window(i, i + 1) for i in indices]
+    raws = pool.map(
+        _worker_rgb, [w.snapshots for w in windows], [w.first for w in windows], indices
+    )
+    return [Image.frombytes("RGB", job.camera.size, raw) for raw in raws]
 
 
 def _sample_indices(count: int, wanted: int) -> list[int]:
@@ -366,8 +392,9 @@ def export_run(
     ``sheet.png`` a contact sheet of about 12 frames; ``motion.json`` (see :func:`motion_json`).
     ``png_compression`` is the zlib level of the PNG files, 0..9: the default 1 is fast, 9 makes
     files about a third smaller and the export slower.
-    ``workers`` processes draw the frames (None: one per CPU for long runs, else 1); the files
-    are the same byte for byte whatever the count. Workers are spawned, so, as always with
+    ``workers`` processes draw the frames (None: for long runs one per CPU but the one this
+    process keeps busy, so none on two cores; else 1); the files are the same byte for byte
+    whatever the count. Workers are spawned, so, as always with
     multiprocessing, a calling script needs an ``if __name__ == "__main__":`` guard. Frame files left from an earlier, longer run
     are removed so ``frames/`` holds this run only. Check ``out_dir`` first with
     :func:`check_out_dir`.
@@ -402,7 +429,7 @@ def export_run(
     try:
         written = _write_frames(out, job, workers, samples, frames, gif, apng, show_progress)
     finally:
-        # The colour table is 16 MB: keep it no longer than the export that needed it.
+        # The colour table takes a few MB: keep it no longer than the export that needed it.
         quantizer.cache_clear()
     if sheet:
         written.append(

@@ -14,8 +14,10 @@ from PIL import Image
 
 from ikgame.render import export
 from ikgame.render.export import export_run, motion_json
+from ikgame.render.theme import load_theme
 
 SIZE = (160, 90)
+LIGHT = load_theme("light")
 
 
 def _export(out, scene, snaps, **kwargs):
@@ -193,3 +195,23 @@ def test_code_from_stdin_exports_serially_or_says_why(tmp_path, run, monkeypatch
     assert export._worker_count(None, len(snaps)) == 1
     with pytest.raises(ValueError, match="workers=1"):
         _export(tmp_path, scene, snaps, workers=2)
+
+
+def test_a_window_of_a_run_draws_its_frames_as_the_whole_run_does(run):
+    scene, snaps = run(120)
+    job = export._Job(scene, tuple(snaps), export.Camera.fit(scene, snaps, SIZE), LIGHT, True, 1)
+    window = job.window(100, 108)
+    # Only the frames and the trail they need travel to a worker, not the run.
+    assert window.first == 100 - round(export.TRAIL_SECONDS * scene.fps)
+    assert len(window.snapshots) == 108 - window.first
+    for index in (100, 107):
+        assert window.render(index).tobytes() == job.render(index).tobytes()
+    assert job.window(0, 8).first == 0
+
+
+def test_automatic_workers_leave_this_process_a_core(run, monkeypatch):
+    monkeypatch.setattr(export, "_main_importable", lambda: True)
+    for cores, expected in [(1, 1), (2, 1), (4, 3), (64, export.MAX_AUTO_WORKERS)]:
+        monkeypatch.setattr(export.os, "cpu_count", lambda cores=cores: cores)
+        assert export._worker_count(None, export.PARALLEL_MIN_FRAMES) == expected
+    assert export._worker_count(None, export.PARALLEL_MIN_FRAMES - 1) == 1
