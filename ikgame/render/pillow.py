@@ -156,10 +156,14 @@ def _dirty_rects(
     tile = DIRTY_TILE * supersample  # in drawing px
     columns, rows = math.ceil(width / DIRTY_TILE), math.ceil(height / DIRTY_TILE)
     touched = np.zeros((rows, columns), dtype=bool)
-    for x0, y0, x1, y1 in boxes:
-        c0, r0 = max(0, math.floor(x0 / tile)), max(0, math.floor(y0 / tile))
-        c1, r1 = min(columns, math.ceil(x1 / tile)), min(rows, math.ceil(y1 / tile))
-        if c0 < c1 and r0 < r1:
+    if boxes:
+        spans = np.asarray(boxes, dtype=float) / tile
+        # Clipped to the frame at both ends: a box outside it gives an empty slice (a negative
+        # bound would count from the far end instead).
+        limit = [columns, rows]
+        low = np.clip(np.floor(spans[:, :2]), 0, limit).astype(int)
+        high = np.clip(np.ceil(spans[:, 2:]), 0, limit).astype(int)
+        for c0, r0, c1, r1 in np.hstack([low, high]).tolist():
             touched[r0:r1, c0:c1] = True
     rects: list[tuple[int, int, int, int]] = []
     open_runs: dict[tuple[int, int], int] = {}  # a run of columns -> the row its rectangle began

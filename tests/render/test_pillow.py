@@ -144,7 +144,12 @@ def test_dirty_rects_cover_every_box_with_tiles_and_no_more():
         assert covered[y0:y1, x0:x1].all()
     # Far less than the rectangle around the diagonal, which the tiles would all fill.
     assert covered.sum() < 0.5 * (600 / ss + 12) * (354 / ss + 12)
-    assert pillow._dirty_rects([(-90.0, -90.0, -10.0, -10.0)], size, ss) == []
+    for outside in [
+        (-90.0, -90.0, -10.0, -10.0),
+        (-900.0, 9.0, -500.0, 30.0),
+        (9e3, 9e3, 1e4, 1e4),
+    ]:
+        assert pillow._dirty_rects([outside], size, ss) == []
 
 
 def test_a_chain_out_of_the_picture_leaves_the_static_scene(run):
