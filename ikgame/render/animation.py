@@ -88,7 +88,8 @@ class _Quantizer:
     def indices(self, image: Image.Image) -> bytes:
         # RGBX is Pillow's own layout: one little-endian uint32 per pixel, R in the low byte,
         # X masked off.
-        rgbx = image.convert("RGB").tobytes("raw", "RGBX")
+        rgb = image if image.mode == "RGB" else image.convert("RGB")  # no copy of a frame
+        rgbx = rgb.tobytes("raw", "RGBX")
         packed = np.frombuffer(rgbx, dtype="<u4") & 0xFFFFFF
         found = self.table[packed]
         missing = found == 0
