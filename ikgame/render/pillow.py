@@ -89,19 +89,18 @@ def render_snapshot(
 
     big = camera.scaled(supersample)
     static_big, static = _static_layers(scene, camera, theme, supersample)
-    # Measure first: only what the moving parts touch is drawn and shrunk, which is most of the
+    # Record first: only what the moving parts touch is drawn and shrunk, which is most of the
     # saving, since shrinking costs more than all the drawing.
-    extent = _Extent()
-    _draw_dynamic(_Painter(extent, big, theme, supersample), scene, snapshot, trail)
+    recording = _Recording()
+    _draw_dynamic(_Painter(recording, big, theme, supersample), scene, snapshot, trail)
     image = static.copy()
-    rects = _dirty_rects(extent.boxes, camera.size, supersample)
+    rects = _dirty_rects(recording.boxes, camera.size, supersample)
     if rects:
         ss = supersample
         left, top = min(r[0] for r in rects), min(r[1] for r in rects)
         right, bottom = max(r[2] for r in rects), max(r[3] for r in rects)
         region = static_big.crop((left * ss, top * ss, right * ss, bottom * ss))
-        painter = _Painter(ImageDraw.Draw(region), big, theme, ss, (left * ss, top * ss))
-        _draw_dynamic(painter, scene, snapshot, trail)
+        recording.replay(ImageDraw.Draw(region), (left * ss, top * ss))
         for x0, y0, x1, y1 in rects:
             tile = region.crop(
                 ((x0 - left) * ss, (y0 - top) * ss, (x1 - left) * ss, (y1 - top) * ss)
@@ -190,33 +189,45 @@ def _runs(flags: np.ndarray) -> list[tuple[int, int]]:
     return list(zip(edges[::2].tolist(), edges[1::2].tolist(), strict=True))
 
 
-class _Extent:
-    """Stands in for ``ImageDraw`` on a measuring pass: records the box of each primitive."""
+class _Recording:
+    """Stands in for ``ImageDraw`` on the first pass: keeps each primitive and the box it
+    touches, so that the frame is then drawn by replaying them onto the region that changes,
+    without running the painter a second time."""
 
     def __init__(self) -> None:
         self.boxes: list[tuple[float, float, float, float]] = []
+        self.calls: list[tuple[str, list[tuple[float, float]], dict[str, object]]] = []
 
-    def _add(self, xy: Sequence[object], pad: float) -> None:
-        # Plain floats, not NumPy: a frame measures hundreds of small primitives.
+    def _add(self, name: str, xy: Sequence[object], pad: float, options: dict[str, object]) -> None:
+        # Plain floats, not NumPy: a frame records hundreds of small primitives.
         if isinstance(xy[0], int | float):
-            xs, ys = xy[0::2], xy[1::2]
+            points = list(zip(xy[0::2], xy[1::2], strict=True))
         else:
-            xs, ys = [p[0] for p in xy], [p[1] for p in xy]  # type: ignore[index]
+            points = [(p[0], p[1]) for p in xy]  # type: ignore[index]
+        xs, ys = [p[0] for p in points], [p[1] for p in points]
         self.boxes.append((min(xs) - pad, min(ys) - pad, max(xs) + pad, max(ys) + pad))  # type: ignore[type-var, operator]
+        self.calls.append((name, points, options))  # type: ignore[arg-type]
 
     # Pillow rounds coordinates and grows outlines and wide lines by up to their width: pad.
-    def line(self, xy: object, fill: object = None, width: int = 1, **_: object) -> None:
-        self._add(xy, width + 1)
+    def line(self, xy: Sequence[object], fill: object = None, width: int = 1) -> None:
+        self._add("line", xy, width + 1, {"fill": fill, "width": width})
 
     def polygon(
-        self, xy: object, fill: object = None, outline: object = None, width: int = 1
+        self, xy: Sequence[object], fill: object = None, outline: object = None, width: int = 1
     ) -> None:
-        self._add(xy, width + 1)
+        self._add("polygon", xy, width + 1, {"fill": fill, "outline": outline, "width": width})
 
     def ellipse(
-        self, xy: object, fill: object = None, outline: object = None, width: int = 1
+        self, xy: Sequence[object], fill: object = None, outline: object = None, width: int = 1
     ) -> None:
-        self._add(xy, 1)
+        self._add("ellipse", xy, 1, {"fill": fill, "outline": outline, "width": width})
+
+    def replay(self, draw: ImageDraw.ImageDraw, offset: tuple[int, int]) -> None:
+        """Draw the recorded primitives on ``draw``, whose top-left corner is drawing pixel
+        ``offset`` of the frame."""
+        ox, oy = offset
+        for name, points, options in self.calls:
+            getattr(draw, name)([(x - ox, y - oy) for x, y in points], **options)
 
 
 def _blend(base: RGB, color: RGB, alpha: float) -> RGB:
@@ -229,22 +240,19 @@ class _Painter:
 
     def __init__(
         self,
-        draw: ImageDraw.ImageDraw | _Extent,
+        draw: ImageDraw.ImageDraw | _Recording,
         camera: Camera,
         theme: Theme,
         ss: int,
-        offset: tuple[int, int] = (0, 0),
     ) -> None:
         self.draw = draw
         self.camera = camera
         self.theme = theme
         self.ss = ss  # drawing pixels per output pixel
-        # Drawing px of the image's top-left corner when drawing on a crop of the frame.
-        self.offset = np.array(offset, dtype=float)
 
     def px(self, points: object) -> np.ndarray:
         points = np.asarray(points, dtype=float).reshape(-1, 2)
-        return to_draw_coords(self.camera, points) - self.offset
+        return to_draw_coords(self.camera, points)
 
     def circle(
         self,
