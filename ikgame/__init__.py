@@ -32,7 +32,8 @@ __all__, __getattr__, __dir__ = lazy_exports(
             "render_snapshot",
         ],
         "ikgame.sim": ["RunResult", "Simulation", "TickInfo", "run_level"],
-        "ikgame.snapshot": ["Scene", "Snapshot"],
+        "ikgame.skins": ["skin_scene"],
+        "ikgame.snapshot": ["Scene", "Snapshot", "Sprite"],
     },
 )
 
@@ -42,4 +43,5 @@ if TYPE_CHECKING:
     from ikgame.level import DEFAULT_LEVEL, Level, LevelError, load_level, parse_level
     from ikgame.render import Camera, PillowDrawOptions, export_run, load_theme, render_snapshot
     from ikgame.sim import RunResult, Simulation, TickInfo, run_level
-    from ikgame.snapshot import Scene, Snapshot
+    from ikgame.skins import skin_scene
+    from ikgame.snapshot import Scene, Snapshot, Sprite

@@ -30,6 +30,10 @@ def test_run_writes_results_and_exits_zero(tmp_path, capsys):
     assert data["status"] == "passed"
     assert all(step["final_error"] <= 6.0 for step in data["steps"])
     assert "passed" in capsys.readouterr().out
+    # The trajectory comes without pictures too: tuning motion needs no rendering.
+    motion = json.loads((out / "motion.json").read_text())
+    assert len(motion["frames"]) == round(data["sim_time"] * motion["fps"])
+    assert not (out / "frames").exists() and not (out / "run.gif").exists()
 
 
 def test_two_runs_write_byte_identical_results(tmp_path):
@@ -255,3 +259,81 @@ def test_compare_runs_every_solver_on_every_shipped_level(tmp_path, level):
     assert main(["compare", str(level), "--quiet", "--out", str(out)]) == 0
     data = json.loads((out / "compare.json").read_text())
     assert list(data["solvers"]) == ["ccd", "jacobian_transpose", "dls", "fabrik"]
+
+
+# -- sprites and MP4 -----------------------------------------------------------------------------
+
+
+def test_run_mp4_of_the_hero_level_is_h264_with_every_frame(tmp_path, probe_video):
+    out = tmp_path / "run"
+    args = ["run", "12_push_the_ball", "--quiet", "--mp4", "--no-gif", "--size", "321x181"]
+    assert main([*args, "--out", str(out)]) == 0
+    frames = len(list((out / "frames").glob("*.png")))
+    assert frames > 100
+    # An odd side loses its last pixel: H.264 in yuv420p needs even sides.
+    assert probe_video(out / "run.mp4") == {
+        "codec": "h264",
+        "pix_fmt": "yuv420p",
+        "size": (320, 180),
+        "fps": 30.0,
+        "frames": frames,
+    }
+    assert sorted(p.name for p in out.iterdir()) == [
+        "frames",
+        "motion.json",
+        "results.json",
+        "run.mp4",
+    ]
+
+
+def test_mp4_without_the_video_extra_exits_2_with_the_install_command_before_running(
+    tmp_path, capsys, monkeypatch
+):
+    import importlib.util
+
+    from ikgame.render import video
+    from ikgame.sim import Simulation
+
+    real = importlib.util.find_spec
+    monkeypatch.setattr(
+        video.importlib.util,
+        "find_spec",
+        lambda name, *a: None if name == "imageio_ffmpeg" else real(name, *a),
+    )
+    monkeypatch.setattr(Simulation, "run", lambda *a, **k: pytest.fail("simulated anyway"))
+    out = tmp_path / "out"
+    assert main(["run", "--mp4", "--out", str(out)]) == 2
+    assert (
+        "--mp4: MP4 export needs the video extra (imageio-ffmpeg): python -m pip install "
+        "'ikgame[video]'" in capsys.readouterr().err
+    )
+    assert not out.exists()
+    assert main(["run", "--mp4", "--no-frames", "--out", str(out)]) == 2
+    assert "--mp4: there are no pictures to encode with --no-frames" in capsys.readouterr().err
+
+
+def test_a_missing_sprite_exits_2_naming_its_line_in_run_and_validate(tmp_path, capsys):
+    level = tmp_path / "skinned.toml"
+    level.write_text(
+        (ROOT / "levels" / "14_skinned_arm.toml")
+        .read_text()
+        .replace("sprites/forearm.png", "sprites/nope.png")
+    )
+    out = tmp_path / "out"
+    assert main(["run", str(level), "--out", str(out)]) == 2
+    line = level.read_text().splitlines().index('sprite = "sprites/nope.png"') + 1
+    expected = f"{level}:{line}: chain.links[1].sprite: no file 'sprites/nope.png' in the level's"
+    assert expected in capsys.readouterr().err
+    assert not out.exists()
+    assert main(["validate", str(level)]) == 2
+    assert expected in capsys.readouterr().err
+
+
+def test_a_skinned_level_gives_the_same_frames_serial_and_in_workers(tmp_path):
+    for name, workers in (("a", "1"), ("b", "2")):
+        args = ["run", "14_skinned_arm", "--quiet", "--no-gif", "--size", "96x54"]
+        assert main([*args, "--workers", workers, "--out", str(tmp_path / name)]) == 0
+    a = sorted((tmp_path / "a/frames").iterdir())
+    b = sorted((tmp_path / "b/frames").iterdir())
+    assert len(a) == len(b) > 100
+    assert all(x.read_bytes() == y.read_bytes() for x, y in zip(a, b, strict=True))

@@ -13,7 +13,8 @@ __all__, __getattr__, __dir__ = lazy_exports(
     {
         "ikgame.render.camera": ["Camera"],
         "ikgame.render.debug_draw": ["PillowDrawOptions"],
-        "ikgame.render.export": ["export_run", "motion_json", "trail_at"],
+        "ikgame.render.export": ["export_run", "trail_at"],
+        "ikgame.render.motion": ["motion_json", "write_motion"],
         "ikgame.render.output": ["check_out_dir", "parse_size"],
         "ikgame.render.pillow": ["render_snapshot", "to_draw_coords"],
         "ikgame.render.plot": ["ComparisonPlot", "SolverTrace", "render_comparison"],
@@ -24,7 +25,8 @@ __all__, __getattr__, __dir__ = lazy_exports(
 if TYPE_CHECKING:
     from ikgame.render.camera import Camera
     from ikgame.render.debug_draw import PillowDrawOptions
-    from ikgame.render.export import export_run, motion_json, trail_at
+    from ikgame.render.export import export_run, trail_at
+    from ikgame.render.motion import motion_json, write_motion
     from ikgame.render.output import check_out_dir, parse_size
     from ikgame.render.pillow import render_snapshot, to_draw_coords
     from ikgame.render.plot import ComparisonPlot, SolverTrace, render_comparison

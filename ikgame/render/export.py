@@ -1,5 +1,5 @@
-"""Write a recorded run to disk: PNG frames, a looping GIF, an APNG, a contact sheet, and the baked
-motion as JSON keyframes.
+"""Write a recorded run to disk: PNG frames, a looping GIF, an APNG, an MP4, a contact sheet, and
+the baked motion as JSON keyframes.
 
 Frames are independent of each other (each frame's trail is read from the snapshot list), so they
 can be drawn in worker processes; every byte that ends up in a file comes from the same
@@ -7,12 +7,12 @@ deterministic functions either way, so a parallel export is identical to a seria
 written to a temporary name in their folder and renamed into place, so a reader never sees half a
 file, and an interrupted export leaves no stray temporaries. The GIF and APNG are streamed one
 frame at a time, so a long run does not hold its frames in memory; their file formats are written
-by :mod:`ikgame.render.animation`, while this module decides what goes into them.
+by :mod:`ikgame.render.animation` (and the MP4 by :mod:`ikgame.render.video`), while this module
+decides what goes into them.
 """
 
 from __future__ import annotations
 
-import json
 import math
 import multiprocessing
 import os
@@ -25,7 +25,6 @@ from concurrent.futures import Future, ProcessPoolExecutor
 from contextlib import ExitStack, contextmanager
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import IO, Any
 
 import numpy as np
 from PIL import Image, ImageDraw, ImageFont
@@ -34,13 +33,15 @@ from ikgame._files import atomic_open, write_atomic
 from ikgame._progress import progress_bar
 from ikgame.render.animation import ApngWriter, GifWriter, build_palette, gif_durations, quantizer
 from ikgame.render.camera import Camera
+from ikgame.render.motion import check_run, motion_json, write_motion
 from ikgame.render.output import check_export_size, check_out_dir, parse_size
 from ikgame.render.pillow import render_snapshot
 from ikgame.render.png import check_compress_level, png_bytes
 from ikgame.render.theme import Theme, load_theme
+from ikgame.render.video import Mp4Writer, check_video, even_size
 from ikgame.snapshot import Scene, Snapshot
 
-__all__ = ["check_out_dir", "export_run", "motion_json", "parse_size", "trail_at"]
+__all__ = ["check_out_dir", "export_run", "motion_json", "parse_size", "trail_at", "write_motion"]
 
 TRAIL_SECONDS = 1.5  # s of end-effector path drawn behind it
 GIF_MAX_FPS = 50.0  # browsers play GIF delays under 2 cs as 10 cs, so faster runs drop frames
@@ -55,91 +56,6 @@ _FRAME_NAME = re.compile(r"\d{6}\.png")
 
 
 # -- input checks --------------------------------------------------------------------------------
-
-
-def _check_run(scene: Scene, snapshots: Sequence[Snapshot]) -> None:
-    if not snapshots:
-        raise ValueError("no snapshots to export")
-    if not (math.isfinite(scene.fps) and scene.fps > 0):
-        raise ValueError(f"scene.fps must be a positive number, got {scene.fps!r}")
-
-
-# -- baked motion --------------------------------------------------------------------------------
-
-
-def motion_json(scene: Scene, snapshots: Sequence[Snapshot]) -> dict[str, Any]:
-    """The run as keyframes a game engine can import: one entry per recorded frame.
-
-    Each frame has every joint's local angle (radians and degrees), every link's world angle,
-    the world positions of the joints (base first, end effector last), the target and the
-    solver's status. Positions are world px with y up; NaN errors become null.
-
-    >>> scene = Scene("demo", np.zeros((0, 5)), np.zeros((0, 3)), np.full(1, 8.0), 100.0)
-    >>> snap = Snapshot(0.0, 0, np.array([[0.0, 0.0], [0.0, 100.0]]), np.array([1.5708]),
-    ...                 np.array([1.5708]))
-    >>> motion = motion_json(scene, [snap])
-    >>> motion["link_lengths"], motion["frames"][0]["angles_deg"]
-    ([100.0], [90.0002])
-    """
-    return _motion_header(scene, snapshots) | {"frames": [_motion_frame(s) for s in snapshots]}
-
-
-def _motion_header(scene: Scene, snapshots: Sequence[Snapshot]) -> dict[str, Any]:
-    """Everything in :func:`motion_json` but the frames."""
-    _check_run(scene, snapshots)
-    first = np.asarray(snapshots[0].joints, dtype=float)
-    lengths = np.linalg.norm(np.diff(first, axis=0), axis=1)
-    return {
-        "format": "ikgame-motion",
-        "version": 1,
-        "level": scene.level_name,
-        "fps": float(scene.fps),
-        "frame_count": len(snapshots),
-        "duration": _round(len(snapshots) / scene.fps, 6),
-        "units": {"length": "px", "angle": "rad, and deg in *_deg", "time": "s", "y_axis": "up"},
-        "conventions": {
-            "angles": "local joint angle of each link relative to its parent link, counter-clockwise",
-            "world_angles": "each link's direction relative to +x, counter-clockwise",
-            "joints": "world positions: the base, each following joint, then the end effector",
-        },
-        "link_count": len(lengths),
-        "link_lengths": [_round(v, 3) for v in lengths],
-        "link_widths": [_round(v, 3) for v in np.asarray(scene.link_widths, dtype=float)],
-    }
-
-
-def _motion_frame(snap: Snapshot) -> dict[str, Any]:
-    angles = np.asarray(snap.angles, dtype=float)
-    error = float(snap.error)
-    return {
-        "time": _round(snap.time, 6),
-        "tick": int(snap.tick),
-        "step_index": int(snap.step_index),
-        "angles_rad": [_round(a, 6) for a in angles],
-        "angles_deg": [_round(a, 4) for a in np.degrees(angles)],
-        "world_angles_rad": [_round(a, 6) for a in np.asarray(snap.world_angles, dtype=float)],
-        "joints": [[_round(x, 3), _round(y, 3)] for x, y in np.asarray(snap.joints, dtype=float)],
-        "target": None if snap.target is None else [_round(v, 3) for v in snap.target],
-        "error": _round(error, 3) if math.isfinite(error) else None,
-        "solver_status": str(snap.solver_status),
-        "torque_limited": [bool(v) for v in np.asarray(snap.torque_limited, dtype=bool)],
-    }
-
-
-def _round(value: float, digits: int) -> float:
-    # +0.0 turns -0.0 into 0.0, which would otherwise print as "-0.0" in the keyframes.
-    return round(float(value), digits) + 0.0
-
-
-def _write_motion(fp: IO[bytes], scene: Scene, snapshots: Sequence[Snapshot]) -> None:
-    """Write :func:`motion_json` as JSON: an indented header, then one line per frame so runs
-    diff well. Streamed a frame at a time: a long run's keyframes are never all in memory."""
-    head = json.dumps(_motion_header(scene, snapshots), indent=2, allow_nan=False)
-    fp.write(f'{head[:-2]},\n  "frames": [\n    '.encode())
-    for index, snap in enumerate(snapshots):
-        separator = ",\n    " if index else ""
-        fp.write((separator + json.dumps(_motion_frame(snap), allow_nan=False)).encode())
-    fp.write(b"\n  ]\n}\n")
 
 
 # -- one frame -----------------------------------------------------------------------------------
@@ -176,6 +92,7 @@ class _Job:
     theme: Theme
     png: bool  # encode PNG bytes (frames or APNG)
     gif_stride: int  # every gif_stride-th frame goes into the GIF; 0 without a GIF
+    mp4: bool = False  # raw RGB of the even-sided frame, for the MP4 encoder
     png_compression: int = PNG_COMPRESSION  # zlib level: 1 fast .. 9 small
     first: int = 0  # frame index of snapshots[0]
 
@@ -197,14 +114,18 @@ class _Job:
             hud=hud,
         )
 
-    def payload(self, index: int, palette: bytes | None) -> tuple[bytes | None, bytes | None]:
-        """Frame ``index`` as PNG bytes and as GIF palette indices (None where not wanted)."""
+    def payload(self, index: int, palette: bytes | None) -> tuple[bytes | None, ...]:
+        """Frame ``index`` as PNG bytes, as GIF palette indices and as the MP4's RGB bytes
+        (None where not wanted)."""
         image = self.render(index)
         png = png_bytes(image, self.png_compression) if self.png else None
         indices = None
         if palette is not None and index % self.gif_stride == 0:
             indices = quantizer(palette).indices(image)
-        return png, indices
+        rgb = None
+        if self.mp4:
+            rgb = image.crop((0, 0, *even_size(image.size))).tobytes()
+        return png, indices, rgb
 
 
 # -- worker processes ------------------------------------------------------------------------------
@@ -225,7 +146,9 @@ def _worker_payloads(
     payloads = [job.payload(i, palette) for i in range(start, stop)]
     # Palette indices are a byte per pixel but mostly runs: compressed they are ~5% of the
     # size, both in the pipe to the main process and in results queued for their turn.
-    return [(png, None if idx is None else zlib.compress(idx, 1)) for png, idx in payloads]
+    return [
+        (png, None if idx is None else zlib.compress(idx, 1), rgb) for png, idx, rgb in payloads
+    ]
 
 
 def _worker_rgb(snapshots: tuple[Snapshot, ...], first: int, index: int) -> bytes:
@@ -281,7 +204,7 @@ def _pool(job: _Job, workers: int) -> Iterator[ProcessPoolExecutor | None]:
 
 def _payloads(
     job: _Job, pool: ProcessPoolExecutor | None, workers: int, palette: bytes | None
-) -> Iterator[tuple[bytes | None, bytes | None]]:
+) -> Iterator[tuple[bytes | None, ...]]:
     """Every frame's payload, in order, drawn here or by the pool."""
     count = len(job.snapshots)
     if pool is None:
@@ -306,8 +229,8 @@ def _payloads(
     while pending:
         results = pending.popleft().result()
         submit()
-        for png, packed in results:
-            yield png, None if packed is None else zlib.decompress(packed)
+        for png, packed, rgb in results:
+            yield png, None if packed is None else zlib.decompress(packed), rgb
 
 
 def _sample_images(
@@ -379,6 +302,7 @@ def export_run(
     gif: bool = True,
     apng: bool = False,
     sheet: bool = False,
+    mp4: bool = False,
     motion: bool = True,
     workers: int | None = None,
     progress: bool = True,
@@ -389,6 +313,7 @@ def export_run(
     ``frames/000000.png``... one per snapshot; ``run.gif`` looping, with one shared adaptive
     palette and delays that add up to the run's length (runs above 50 fps keep every 2nd, 3rd...
     frame, as browsers slow faster GIFs down); ``run.png`` an APNG at the exact frame rate;
+    ``run.mp4`` H.264 at the run's fps (needs the ``video`` extra; see :mod:`ikgame.render.video`);
     ``sheet.png`` a contact sheet of about 12 frames; ``motion.json`` (see :func:`motion_json`).
     ``png_compression`` is the zlib level of the PNG files, 0..9: the default 1 is fast, 9 makes
     files about a third smaller and the export slower.
@@ -407,9 +332,11 @@ def export_run(
     ['000000.png', 'run.gif', 'motion.json']
     """
     snapshots = tuple(snapshots)
-    _check_run(scene, snapshots)
+    check_run(scene, snapshots)
     size = check_export_size(size)
     check_compress_level(png_compression)
+    if mp4:
+        check_video()
     resolved_theme = theme if isinstance(theme, Theme) else load_theme(theme)
     workers = _worker_count(workers, len(snapshots))
     out = Path(out_dir)
@@ -423,11 +350,12 @@ def export_run(
         png=frames or apng,
         gif_stride=stride,
         png_compression=png_compression,
+        mp4=mp4,
     )
     samples = _sample_indices(len(snapshots), SHEET_THUMBS)
     show_progress = progress and sys.stderr.isatty()
     try:
-        written = _write_frames(out, job, workers, samples, frames, gif, apng, show_progress)
+        written = _write_frames(out, job, workers, samples, frames, gif, apng, mp4, show_progress)
     finally:
         # The colour table takes a few MB: keep it no longer than the export that needed it.
         quantizer.cache_clear()
@@ -438,9 +366,7 @@ def export_run(
             )
         )
     if motion:
-        with atomic_open(out / "motion.json") as fp:
-            _write_motion(fp, scene, snapshots)
-        written.append(out / "motion.json")
+        written.append(write_motion(out, scene, snapshots))
     return written
 
 
@@ -452,6 +378,7 @@ def _write_frames(
     frames: bool,
     gif: bool,
     apng: bool,
+    mp4: bool,
     progress: bool,
 ) -> list[Path]:
     """Draw every frame once and stream it to the PNG frames, the GIF and the APNG."""
@@ -480,7 +407,11 @@ def _write_frames(
             animations.append(out / "run.png")
             apng_file = files.enter_context(atomic_open(animations[-1]))
             apng_writer = ApngWriter(apng_file, count, size, job.scene.fps)
-        for index, (png, indices) in enumerate(_payloads(job, pool, workers, palette)):
+        video = None
+        if mp4:
+            animations.append(out / "run.mp4")
+            video = files.enter_context(Mp4Writer(animations[-1], even_size(size), job.scene.fps))
+        for index, (png, indices, rgb) in enumerate(_payloads(job, pool, workers, palette)):
             if frames:
                 assert png is not None
                 frame_paths.append(write_atomic(frames_dir / f"{index:06d}.png", png))
@@ -489,6 +420,9 @@ def _write_frames(
             if apng_writer is not None:
                 assert png is not None
                 apng_writer.add(png)
+            if video is not None:
+                assert rgb is not None
+                video.add(rgb)
             update(index + 1)
         # Trailers last, inside the block: the atomic files are renamed into place on its exit.
         if gif_writer is not None:
