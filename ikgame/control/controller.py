@@ -20,7 +20,7 @@ from typing import Final
 import numpy as np
 
 from ikgame.control.servo import Servo, ServoCommand
-from ikgame.kinematics import Skeleton, Solution, SolveStatus, get_solver, wrap_angle
+from ikgame.kinematics import RobustSolver, Skeleton, Solution, SolveStatus, wrap_angle
 from ikgame.kinematics.jacobian import jacobian
 
 __all__ = ["Command", "Controller", "joint_error"]
@@ -79,9 +79,9 @@ class Controller:
         arrival: float = 0.5,
         servo: Servo | None = None,
     ) -> None:
-        self.skeleton = skeleton
-        self.solver_name = solver
-        self.solve = get_solver(solver)
+        # Stalls (limits, coils, the long way round a stop) are recovered from, and a settled
+        # chain's answer is cached, by one solver object that lives with the chain.
+        self._solver = RobustSolver(skeleton, solver)
         self.max_speed = np.asarray(max_speed, dtype=float)
         self.servo = servo
         self.gain = gain
@@ -105,10 +105,23 @@ class Controller:
         if self.servo is not None:
             self.servo.gain = self._gain
 
+    @property
+    def skeleton(self) -> Skeleton:
+        """The chain being driven; set it when the base moves."""
+        return self._solver.skeleton
+
+    @skeleton.setter
+    def skeleton(self, skeleton: Skeleton) -> None:
+        self._solver.skeleton = skeleton
+
+    @property
+    def solver_name(self) -> str:
+        """The solver in use (``ccd``, ``jacobian_transpose``, ``dls``, ``fabrik``)."""
+        return self._solver.solver_name
+
     def set_solver(self, name: str) -> None:
         """Switch solver from the next tick on (``ccd``, ``jacobian_transpose``, ``dls``, ``fabrik``)."""
-        self.solve = get_solver(name)
-        self.solver_name = name
+        self._solver.solver_name = name
 
     def _goal_rates(
         self, measured: np.ndarray, target: np.ndarray | None, dt: float
@@ -141,6 +154,8 @@ class Controller:
         stalled motor only grinds."""
         self._held = self.skeleton.clamp(np.asarray(measured, dtype=float).copy())
         self._holding = True
+        # A cached answer is one the chain could not get to: solve afresh when released.
+        self._solver.reset()
 
     def release(self) -> None:
         """Solve toward the target again after :meth:`hold`."""
@@ -172,12 +187,8 @@ class Controller:
             solution = Solution(self._held, SolveStatus.SUCCESS, 0, 0.0)
         else:
             start = np.where(self._limited, measured, [wrap_angle(a) for a in measured])
-            solution = self.solve(
-                self.skeleton,
-                start,
-                target,
-                max_iterations=self.iterations,
-                tolerance=self.arrival,
+            solution = self._solver.solve(
+                start, target, max_iterations=self.iterations, tolerance=self.arrival
             )
             self._held = solution.angles
         error = joint_error(solution.angles, measured, self._limited)

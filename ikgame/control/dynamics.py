@@ -16,7 +16,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["ChainInertia", "Drive", "JointLoads", "inverse_dynamics", "plan_drive"]
+__all__ = [
+    "ChainInertia",
+    "Drive",
+    "JointLoads",
+    "Pose",
+    "fit_drive",
+    "inverse_dynamics",
+    "plan_drive",
+]
 
 
 @dataclass(frozen=True, eq=False)
@@ -51,26 +59,93 @@ class ChainInertia:
 class JointLoads:
     """What the chain asks of its joints at one instant.
 
+    Loads add up: those of gravity, of the chain's swing and of an acceleration, each computed
+    alone, sum to those of all three at once.
+
     Attributes:
         torques: (n,) torque the motor of each joint must apply to its child (the parent takes
             the reaction), mass px^2/s^2.
         forces: (n, 2) force the parent exerts on its child at each joint, mass px/s^2; the
             pivots carry these whatever the motors do.
-        inertia: (n,) moment of inertia about each joint of everything beyond it, held rigid,
-            mass px^2: what the joint's motor turns when it moves alone.
     """
 
     torques: np.ndarray
     forces: np.ndarray
-    inertia: np.ndarray
+
+    def __add__(self, other: JointLoads) -> JointLoads:
+        return JointLoads(self.torques + other.torques, self.forces + other.forces)
+
+    def scaled(self, factor: float) -> JointLoads:
+        """These loads times ``factor``."""
+        return JointLoads(factor * self.torques, factor * self.forces)
+
+
+class Pose:
+    """A chain's geometry at one instant, computed once for every load asked of it.
+
+    >>> Pose(ChainInertia(np.array([10.0]), np.ones(1), np.ones(1)), np.zeros(1)).links.tolist()
+    [[10.0, 0.0]]
+    """
+
+    def __init__(self, chain: ChainInertia, world_angles: np.ndarray) -> None:
+        self.chain = chain
+        cos, sin = np.cos(world_angles), np.sin(world_angles)
+        self.links = np.empty((chain.count, 2))
+        self.links[:, 0] = chain.lengths * cos
+        self.links[:, 1] = chain.lengths * sin
+        self.halves = 0.5 * self.links
+        self.normals = np.empty_like(self.links)  # each link turned a quarter turn
+        self.normals[:, 0] = -self.links[:, 1]
+        self.normals[:, 1] = self.links[:, 0]
+
+    def loads(
+        self,
+        omega: np.ndarray | None = None,
+        alpha: np.ndarray | None = None,
+        gravity: tuple[float, float] | np.ndarray | None = None,
+    ) -> JointLoads:
+        """Joint torques and pivot forces for per-link world angular velocities ``omega``
+        (rad/s) and accelerations ``alpha`` (rad/s^2) under ``gravity`` (px/s^2); a term left
+        out is zero."""
+        chain = self.chain
+        accel = np.zeros((chain.count, 2))
+        if alpha is not None:
+            accel += alpha[:, None] * self.normals
+        if omega is not None:
+            accel -= (omega * omega)[:, None] * self.links
+        # Each joint accelerates with everything before it; each centre with half its own link.
+        centre = np.cumsum(accel, axis=0) - 0.5 * accel
+        if gravity is not None:
+            centre -= np.asarray(gravity, dtype=float)
+        forces = _reverse_cumsum(chain.masses[:, None] * centre)
+        pair = forces.copy()
+        pair[:-1] += forces[1:]
+        spin = _cross(self.halves, pair)
+        if alpha is not None:
+            spin += chain.moments * alpha
+        return JointLoads(_reverse_cumsum(spin), forces)
+
+    def inertia(self) -> np.ndarray:
+        """(n,) moment of inertia about each joint of everything beyond it, held rigid,
+        mass px^2: what the joint's motor turns when it moves alone."""
+        chain = self.chain
+        joints = np.cumsum(self.links, axis=0) - self.links
+        centres = joints + self.halves
+        m = chain.masses
+        mass = _reverse_cumsum(m)
+        first = _reverse_cumsum(m[:, None] * centres)
+        second = _reverse_cumsum(m * np.einsum("ij,ij->i", centres, centres))
+        # sum_j m_j |c_j - p_i|^2, expanded so that it is three cumulative sums.
+        spread = (
+            second
+            - 2.0 * np.einsum("ij,ij->i", joints, first)
+            + mass * np.einsum("ij,ij->i", joints, joints)
+        )
+        return _reverse_cumsum(chain.moments) + np.maximum(spread, 0.0)
 
 
 def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    return a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
-
-
-def _perp(v: np.ndarray) -> np.ndarray:
-    return np.stack((-v[..., 1], v[..., 0]), axis=-1)
+    return a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
 
 
 def _reverse_cumsum(a: np.ndarray) -> np.ndarray:
@@ -83,13 +158,12 @@ def inverse_dynamics(
     omega: np.ndarray,
     alpha: np.ndarray,
     gravity: tuple[float, float] | np.ndarray,
-    base_acceleration: tuple[float, float] | np.ndarray = (0.0, 0.0),
 ) -> JointLoads:
     """Joint torques and forces that give each link the angular acceleration ``alpha``.
 
     ``world_angles``, ``omega`` and ``alpha`` are per link in the world frame (radians, rad/s,
-    rad/s^2); ``gravity`` and ``base_acceleration`` are px/s^2. This is the recursive
-    Newton-Euler algorithm with its two passes written as cumulative sums.
+    rad/s^2); ``gravity`` is px/s^2; the base holds still. This is the recursive Newton-Euler
+    algorithm with its two passes written as cumulative sums (:meth:`Pose.loads`).
 
     A horizontal link of mass 2 and length 10 held still under gravity needs m g L / 2 at its
     joint:
@@ -99,37 +173,7 @@ def inverse_dynamics(
     >>> loads.torques.round(6).tolist(), loads.forces.round(6).tolist()
     ([9000.0], [[0.0, 1800.0]])
     """
-    directions = np.stack((np.cos(world_angles), np.sin(world_angles)), axis=-1)
-    links = chain.lengths[:, None] * directions
-    halves = 0.5 * links
-    omega2 = (omega * omega)[:, None]
-    # Acceleration of each joint: the base's plus what every link before it adds.
-    link_terms = alpha[:, None] * _perp(links) - omega2 * links
-    joint_acc = np.asarray(base_acceleration, dtype=float) + np.concatenate(
-        (np.zeros((1, 2)), np.cumsum(link_terms, axis=0)[:-1])
-    )
-    centre_acc = joint_acc + alpha[:, None] * _perp(halves) - omega2 * halves
-    net = chain.masses[:, None] * (centre_acc - np.asarray(gravity, dtype=float))
-    forces = _reverse_cumsum(net)
-    beyond = np.concatenate((forces[1:], np.zeros((1, 2))))
-    torques = _reverse_cumsum(chain.moments * alpha + _cross(halves, forces + beyond))
-    return JointLoads(torques, forces, _inertia_beyond(chain, links, halves))
-
-
-def _inertia_beyond(chain: ChainInertia, links: np.ndarray, halves: np.ndarray) -> np.ndarray:
-    joints = np.concatenate((np.zeros((1, 2)), np.cumsum(links, axis=0)[:-1]))
-    centres = joints + halves
-    m = chain.masses
-    mass = _reverse_cumsum(m)
-    first = _reverse_cumsum(m[:, None] * centres)
-    second = _reverse_cumsum(m * np.einsum("ij,ij->i", centres, centres))
-    # sum_j m_j |c_j - p_i|^2, expanded so that it is three cumulative sums.
-    spread = (
-        second
-        - 2.0 * np.einsum("ij,ij->i", joints, first)
-        + mass * np.einsum("ij,ij->i", joints, joints)
-    )
-    return _reverse_cumsum(chain.moments) + np.maximum(spread, 0.0)
+    return Pose(chain, world_angles).loads(omega, alpha, gravity)
 
 
 @dataclass(frozen=True, eq=False)
@@ -167,11 +211,12 @@ def plan_drive(
     for a motion its base cannot follow. The pivot forces come out consistent with the motion,
     which leaves the physics engine nothing to reconcile.
 
-    When even coasting needs more torque than some joint has (a load beyond a weak motor), no
-    factor helps: the torques are clipped joint by joint and the physics engine finds the motion
-    (the chain sags where its motors give out). Computing that motion here instead (forward
-    dynamics through the mass matrix) is exact for one tick but explicit, and the light links of
-    a long chain make it unstable at game tick rates.
+    When even coasting needs more torque than some joint has (a load beyond a weak motor, a
+    knock from an obstacle), no factor helps. The chain is then given the loads of coasting, the
+    overloaded joints' clipped to their limits, the accelerations stay the wanted ones for the
+    motors to strive for with what torque they have left, and the physics engine finds how the
+    chain gives way: its implicit constraint solver is stable where an explicit answer from here
+    (forward dynamics with clipped torques) flings the light links of a long chain about.
 
     >>> one = ChainInertia(np.array([10.0]), np.array([2.0]), np.array([50.0 / 3.0]))
     >>> drive = plan_drive(one, np.zeros(1), np.zeros(1), np.array([300.0]), (0.0, 0.0),
@@ -179,14 +224,23 @@ def plan_drive(
     >>> drive.accelerations.round(6).tolist(), drive.saturated.tolist()
     ([15.0], [True])
     """
-    limit = np.asarray(max_torque, dtype=float)
+    pose = Pose(chain, world_angles)
     wanted = np.asarray(wanted, dtype=float)
-    full = inverse_dynamics(chain, world_angles, omega, np.cumsum(wanted), gravity)
+    bias = pose.loads(omega=omega, gravity=gravity)
+    return fit_drive(bias, pose.loads(alpha=np.cumsum(wanted)), wanted, max_torque)
+
+
+def fit_drive(
+    bias: JointLoads, push: JointLoads, wanted: np.ndarray, max_torque: np.ndarray
+) -> Drive:
+    """:func:`plan_drive` from its parts: ``bias``, the loads of coasting (gravity and the
+    swing), and ``push``, those of the ``wanted`` accelerations alone."""
+    limit = np.asarray(max_torque, dtype=float)
+    full = bias + push
     if np.all(np.abs(full.torques) <= limit):
-        return Drive(wanted, full, np.zeros(chain.count, dtype=bool))
+        return Drive(wanted, full, np.zeros(len(limit), dtype=bool))
     consistent = True
-    bias = inverse_dynamics(chain, world_angles, omega, np.zeros(chain.count), gravity)
-    slope = full.torques - bias.torques
+    slope = push.torques
     with np.errstate(divide="ignore", invalid="ignore"):
         to_upper = (limit - bias.torques) / slope
         to_lower = (-limit - bias.torques) / slope
@@ -197,13 +251,9 @@ def plan_drive(
     if holds and low <= high and high >= 0.0:
         scale = max(0.0, min(1.0, high)) if low <= 0.0 else min(1.0, low)
         accelerations = scale * wanted
-        loads = JointLoads(
-            bias.torques + scale * slope,
-            bias.forces + scale * (full.forces - bias.forces),
-            full.inertia,
-        )
+        loads = bias + push.scaled(scale)
     else:
         accelerations, consistent = wanted, False
-        loads = JointLoads(np.clip(bias.torques, -limit, limit), bias.forces, bias.inertia)
+        loads = JointLoads(np.clip(bias.torques, -limit, limit), bias.forces)
     saturated = np.abs(loads.torques) >= limit * (1.0 - 1e-9)
     return Drive(accelerations, loads, saturated, consistent)

@@ -28,7 +28,7 @@ from typing import Final
 
 import numpy as np
 
-from ikgame.control.dynamics import ChainInertia, inverse_dynamics, plan_drive
+from ikgame.control.dynamics import ChainInertia, Pose, fit_drive
 
 __all__ = ["Servo", "ServoCommand"]
 
@@ -105,11 +105,10 @@ class Servo:
         the desired angles themselves move, when they follow a moving target: the servo moves
         with them and closes the error on top, instead of lagging behind.
         """
-        omega = np.cumsum(velocities)
-        still = np.zeros_like(omega)
-        hold = inverse_dynamics(self.inertia, world_angles, still, still, gravity)
+        pose = Pose(self.inertia, world_angles)
+        hold = pose.loads(gravity=gravity)
         spare = np.maximum(self.max_torque - np.abs(hold.torques), 0.0)
-        reach = spare / hold.inertia
+        reach = spare / pose.inertia()
         brake = BRAKE_SHARE * reach
         # Anti-windup: a joint pushing at its limit yet carried away from its goal cannot get
         # there; it asks only to stop, until :meth:`retry`, so it comes to rest where its
@@ -126,33 +125,39 @@ class Servo:
         speed = np.minimum(
             np.minimum(self.max_speed, self.gain * size), np.sqrt(2.0 * brake * size)
         )
-        target = np.sign(error) * speed
-        if goal_rates is not None:
-            target = target + goal_rates
+        closing = np.sign(error) * speed
+        # Each joint's profile brakes it alone; stopping them all at once also loads the joints
+        # nearer the base with the others' deceleration. Stop together, by the time the first
+        # of them must have stopped (at a constant deceleration), within the braking share:
+        # those torques grow with the square of the velocities, so one factor fits them.
+        moving = np.abs(closing) > 1e-9
+        if np.any(moving):
+            stop_in = float(np.min(2.0 * np.abs(error[moving]) / np.abs(closing[moving])))
+            halt = pose.loads(alpha=np.cumsum(-closing / stop_in))
+            closing = closing * _fit(np.abs(halt.torques), BRAKE_SHARE * spare)
+        target = closing if goal_rates is None else closing + goal_rates
         target = np.clip(target, -self.max_speed, self.max_speed)
         # Joints of a long chain moving at once whip its far end round: the torques that merely
         # keep those velocities grow with their square. Slow every joint by one factor until
         # they fit in the share of spare torque that braking leaves.
-        spin = inverse_dynamics(self.inertia, world_angles, np.cumsum(target), still, (0.0, 0.0))
-        need = np.abs(spin.torques)
-        room = (1.0 - BRAKE_SHARE) * spare
-        over = need > room
-        if np.any(over):
-            target = target * math.sqrt(float(np.min(room[over] / need[over])))
+        spin = pose.loads(omega=np.cumsum(target))
+        target = target * _fit(np.abs(spin.torques), (1.0 - BRAKE_SHARE) * spare)
         # Approach that velocity no faster than each joint's spare torque allows: a servo that
         # asked for the whole change in one tick would saturate every motor after any knock.
         wanted = np.clip(target, velocities - reach * dt, velocities + reach * dt)
         wanted_acceleration = (wanted - velocities) / dt
-        drive = plan_drive(
-            self.inertia, world_angles, omega, wanted_acceleration, gravity, self.max_torque
+        push = pose.loads(alpha=np.cumsum(wanted_acceleration))
+        drive = fit_drive(
+            hold + pose.loads(omega=np.cumsum(velocities)),
+            push,
+            wanted_acceleration,
+            self.max_torque,
         )
         if not drive.consistent:
             # Moving faster than the motors can hold (after a knock, say): feeding forward the
             # swing's own loads, clipped, would fight the pivots and fling a long chain apart.
             # Gravity and the wanted acceleration alone, and pymunk's pivots find the rest.
-            drive = plan_drive(
-                self.inertia, world_angles, still, wanted_acceleration, gravity, self.max_torque
-            )
+            drive = fit_drive(hold, push, wanted_acceleration, self.max_torque)
         self._saturated = drive.saturated
         return ServoCommand(
             rates=velocities + drive.accelerations * dt,
@@ -161,3 +166,12 @@ class Servo:
             budgets=np.maximum(self.max_torque - np.abs(drive.loads.torques), 0.0),
             saturated=drive.saturated,
         )
+
+
+def _fit(need: np.ndarray, room: np.ndarray) -> float:
+    """The factor (0..1) on velocities that brings loads growing with their square, ``need``,
+    within ``room``."""
+    over = need > room
+    if not np.any(over):
+        return 1.0
+    return math.sqrt(float(np.min(room[over] / need[over])))

@@ -7,8 +7,10 @@ read off the forward pass, which places link after link, so each joint limit is 
 exactly, with no conversion afterwards. The backward pass respects the limits too (it turns a
 link no further from the next link's direction than the next joint allows) so that the two
 passes fight less. They can still fight: with joints pressed against their limits the passes
-may stall short of a target the Jacobian solvers and CCD reach, which is FABRIK's known
-weakness with constraints.
+crawl or stall short of a target that is in reach (FABRIK's known weakness with constraints).
+So on a chain with limits a pass that gains little hands the rest of the solve to damped least
+squares, which leaves the joints pressing into their limits alone and moves the others: the
+passes make the big moves, the polish slides the chain along its limits to the target.
 
 A limited joint's angle is read as the representative nearest its previous angle before it is
 clamped, so a joint never jumps round through its limit; a free joint is wrapped to [-pi, pi].
@@ -20,16 +22,30 @@ from __future__ import annotations
 
 import math
 from itertools import accumulate
+from typing import Final
 
 import numpy as np
 
 from ikgame.kinematics._floats import FloatChain
 from ikgame.kinematics.ccd import TRIVIAL_ARC_LENGTH, wrap_angle
-from ikgame.kinematics.jacobian import _check_solve_inputs, _escape_saddle, _solution
+from ikgame.kinematics.jacobian import (
+    _check_solve_inputs,
+    _escape_saddle,
+    _solution,
+    solve_dls,
+)
 from ikgame.kinematics.skeleton import Skeleton
 from ikgame.kinematics.solver import Solution, SolveStatus
 
-__all__ = ["solve_fabrik"]
+__all__ = ["solve_fabrik", "POLISH_PROGRESS"]
+
+POLISH_PROGRESS: Final = 0.1
+"""On a chain with limits, a pass that gains less than this fraction of the error hands over to
+damped least squares (dimensionless).
+
+Against a limit the two passes pull against each other and crawl (a median of 50 passes on
+chains limited to +-10 deg) or stop; damped least squares drops the joints pressing into their
+limits and moves the others, and needs a median of 3 iterations from there."""
 
 
 def solve_fabrik(
@@ -44,10 +60,11 @@ def solve_fabrik(
 
     A target out of reach is answered at once with the chain stretched straight toward it and
     ``FAILURE``, when the limits allow that pose; otherwise the passes pull the chain as
-    straight as the limits let it be. A pass that gains less than ``TRIVIAL_ARC_LENGTH`` is a
-    stall: a straight chain with the target on its own line is bent out of it (FABRIK alone
-    would never leave that line); anything else ends in ``FAILURE``. A pass that would raise the
-    error (limits can make the two passes pull against each other) is not taken.
+    straight as the limits let it be. On a chain with limits, once a pass gains less than
+    ``POLISH_PROGRESS`` of the error, damped least squares takes over for the iterations left.
+    On a free chain a pass that gains less than ``TRIVIAL_ARC_LENGTH`` is a stall: a straight
+    chain with the target on its own line is bent out of it (FABRIK alone would never leave that
+    line); anything else ends in ``FAILURE``. A pass that would raise the error is not taken.
     ``angles`` (radians) warm-starts the solve; ``tolerance`` is in px.
 
     >>> sol = solve_fabrik(Skeleton.chain([100, 100]), np.zeros(2), (0, 150))
@@ -71,6 +88,7 @@ def solve_fabrik(
             error = math.hypot(xs[-1] - tx, ys[-1] - ty)
             status = SolveStatus.SUCCESS if error <= tolerance else SolveStatus.FAILURE
             return _solution(skeleton, stretched, status, 1, error)
+    has_limits = bool(skeleton.limited.any())
     used = 0
     while error > tolerance:
         if used == max_iterations:
@@ -79,11 +97,16 @@ def solve_fabrik(
         reached = _backward_pass(links, current, xs, ys, tx, ty)
         trial, trial_xs, trial_ys = _forward_pass(links, current, reached)
         trial_error = math.hypot(trial_xs[-1] - tx, trial_ys[-1] - ty)
-        if trial_error < error:
-            progress = error - trial_error
+        progress = error - trial_error
+        slow = progress < POLISH_PROGRESS * error
+        if progress > 0.0:
             current, xs, ys, error = trial, trial_xs, trial_ys, trial_error
-            if progress >= TRIVIAL_ARC_LENGTH:
-                continue
+        if has_limits and slow:
+            return _polish(
+                skeleton, np.array(current), target, tolerance, max_iterations - used, used, error
+            )
+        if progress >= TRIVIAL_ARC_LENGTH:
+            continue
         escaped = _escape_saddle(
             skeleton, np.array(current), np.column_stack((xs, ys)), target, error
         )
@@ -93,6 +116,22 @@ def solve_fabrik(
         xs, ys = escaped[1][:, 0].tolist(), escaped[1][:, 1].tolist()
         error = escaped[2]
     return _solution(skeleton, np.array(current), SolveStatus.SUCCESS, used, error)
+
+
+def _polish(
+    skeleton: Skeleton,
+    angles: np.ndarray,
+    target: np.ndarray,
+    tolerance: float,
+    remaining: int,
+    used: int,
+    error: float,
+) -> Solution:
+    """Damped least squares from where the passes slowed down, for the ``remaining`` iterations."""
+    if remaining < 1:
+        return _solution(skeleton, angles, SolveStatus.PROCESSING, used, error)
+    sol = solve_dls(skeleton, angles, target, max_iterations=remaining, tolerance=tolerance)
+    return Solution(sol.angles, sol.status, used + sol.iterations, sol.error)
 
 
 class _Links(FloatChain):

@@ -347,6 +347,13 @@ def _check_solve_inputs(
     The start is a new array, so a solver never changes the caller's angles.
     """
     _check_chain(skeleton)
+    tol = _check_settings(max_iterations, tolerance)
+    start = skeleton.clamp(check_angles(angles, skeleton.count))
+    return start, check_point(target), tol
+
+
+def _check_settings(max_iterations: object, tolerance: object) -> float:
+    """Check a solve's iteration budget and tolerance; return the tolerance as a float, px."""
     if (
         isinstance(max_iterations, bool)
         or not isinstance(max_iterations, int | np.integer)
@@ -358,8 +365,7 @@ def _check_solve_inputs(
     tol = float(tolerance)
     if not math.isfinite(tol) or tol < 0.0:
         raise ValueError(f"tolerance must be finite and >= 0 px, got {tolerance!r}")
-    start = skeleton.clamp(check_angles(angles, skeleton.count))
-    return start, check_point(target), tol
+    return tol
 
 
 def _chain_points(skeleton: Skeleton, angles: np.ndarray) -> np.ndarray:

@@ -34,10 +34,10 @@ def test_a_jammed_arm_reports_blocked_holds_and_tries_again_when_the_target_move
             "level": {"name": "jam", "duration": 8.0},
             "world": {"gravity": [0.0, 0.0]},
             "chain": {"angle": 0.0, "links": [{"length": 100.0, "repeat": 2}]},
-            # A post right on the straight path of the tip to a point behind it.
-            "obstacles": [{"kind": "circle", "center": [120.0, 120.0], "radius": 25.0}],
+            # A post right in the way of the arm swinging round to a point within its reach.
+            "obstacles": [{"kind": "circle", "center": [150.0, 100.0], "radius": 25.0}],
             "script": [
-                {"reach": [150.0, 150.0], "timeout": 3.0},
+                {"reach": [60.0, 170.0], "timeout": 3.0},
                 {"reach": [0.0, -150.0], "timeout": 3.0},
             ],
         }

@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from ikgame.control.dynamics import ChainInertia, inverse_dynamics, plan_drive
+from ikgame.control.dynamics import ChainInertia, Pose, inverse_dynamics, plan_drive
 
 GRAVITY = 900.0
 
@@ -44,9 +44,19 @@ def test_inverse_dynamics_matches_the_two_link_arm(seed):
 def test_inertia_beyond_a_straight_chain_is_the_rod_about_its_end():
     n, length, mass = 10, 12.0, 0.2
     rod = ChainInertia(np.full(n, length), np.full(n, mass), np.full(n, mass * length**2 / 12))
-    loads = inverse_dynamics(rod, np.zeros(n), np.zeros(n), np.zeros(n), (0.0, 0.0))
     total = n * mass
-    assert loads.inertia[0] == pytest.approx(total * (n * length) ** 2 / 3)
+    assert Pose(rod, np.zeros(n)).inertia()[0] == pytest.approx(total * (n * length) ** 2 / 3)
+
+
+def test_loads_add_up_term_by_term():
+    chain = _chain(5, seed=2)
+    rng = np.random.default_rng(4)
+    angles, omega, alpha = (rng.normal(size=5) for _ in range(3))
+    pose = Pose(chain, angles)
+    whole = pose.loads(omega, alpha, (0.0, -900.0))
+    parts = pose.loads(omega=omega) + pose.loads(alpha=alpha) + pose.loads(gravity=(0.0, -900.0))
+    np.testing.assert_allclose(parts.torques, whole.torques, rtol=1e-9, atol=1e-6)
+    np.testing.assert_allclose(parts.forces, whole.forces, rtol=1e-9, atol=1e-6)
 
 
 def _chain(n, seed=0):

@@ -187,9 +187,7 @@ def test_converges_on_reachable_targets_of_free_chains(name, data):
     assert sol.status is SolveStatus.SUCCESS
 
 
-# FABRIK is left out: clamping inside its passes can stall against a limit even near a
-# solution (test_fabrik pins a case).
-@pytest.mark.parametrize("name", ["ccd", "dls", "jacobian_transpose"])
+@pytest.mark.parametrize("name", NAMES)
 @FUZZ
 @given(data=st.data())
 def test_converges_on_reachable_targets_of_limited_chains_from_near_by(name, data):

@@ -1,0 +1,578 @@
+"""Solving tick after tick without getting trapped: restarts on a stall, and a per-chain cache.
+
+The raw solvers are local: from a warm start they slide downhill, and joint limits make the
+landscape full of places to stop short of a target that some pose within the limits reaches (a
+base on its -30 deg stop when the answer needs +100 deg, a chain coiled into its limits, an elbow
+that bends one way only). :class:`RobustSolver` wraps one of them for one chain and is called
+once per tick:
+
+1. **Cached answer.** An answer that a restart from a far seed found is returned as it is,
+   with zero iterations, while it still puts the end effector within the tolerance of the target
+   and until the chain has arrived on it (every joint within ``SETTLED``): a chain on its way to
+   an answer found the long way round keeps heading there instead of falling back into the trap
+   or flipping to another branch half way (hysteresis). The best pose for a target no pose
+   reaches is returned, for nothing, for as long as that target stays.
+2. **Plain solve** from the measured pose, as the raw solver is called without this class: its
+   answer is the nearest to where the chain is. When it arrives, or is still making headway,
+   that is the answer: the common case costs the raw solver's iterations.
+3. **Recovery**, only when the plain solve stalled short of a target within reach: ``FAILURE``;
+   ``PROCESSING`` having gained less than ``STALL_PROGRESS`` of its start error; or
+   ``STALL_CALLS`` calls on one target without arriving. It restarts from other seeds, the
+   nearest to the stalled pose first. Damped least squares goes first, from the stalled pose and
+   from that pose moved ``BACK_OFF`` off the limits: its steps are the shortest that move the
+   end effector, so it finds the answer nearest the pose. Once the target has held still for
+   ``STILL_CALLS`` calls (a moving target would be elsewhere by the time the chain had swung
+   round), far seeds follow, each run by the solver and then by its ``FALLBACK`` from where that
+   stopped: each of the first ``ROUND_JOINTS`` joints turned to aim at the target the other way
+   round its limits; the pose mirrored across the line from the base to the target, and with its
+   bends reversed; the chain stretched toward the target; the middle of every joint's range;
+   ``RANDOM_SEEDS`` poses drawn within the limits by a generator seeded with ``RANDOM_SEED`` (the
+   same inputs give the same answers). The first seed that arrives wins; otherwise the lowest
+   error is kept. A call spends at most ``budget`` iterations on restarts; a search that runs out
+   carries on at the next call with the same target, and one that has tried every seed is cached
+   as ``FAILURE``, so an unreachable target costs nothing after that. When the target moves on
+   before a search arrives, no new search starts for ``RETRY_CALLS`` calls.
+
+A target beyond the chain's reach gets the chain stretched straight toward it at once, when the
+limits allow that pose (it is the closest any pose can come), with ``FAILURE``.
+
+Angles are radians, lengths and positions pixels.
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+from collections import deque
+from collections.abc import Iterator, Mapping
+from dataclasses import dataclass, replace
+from types import MappingProxyType
+from typing import Final
+
+import numpy as np
+
+from ikgame.kinematics._floats import FloatChain
+from ikgame.kinematics.ccd import wrap_angle
+from ikgame.kinematics.jacobian import _chain_points, _check_settings, solve_dls
+from ikgame.kinematics.registry import get_solver
+from ikgame.kinematics.skeleton import Skeleton, check_angles, check_point
+from ikgame.kinematics.solver import Solution, Solver, SolveStatus
+
+__all__ = [
+    "RobustSolver",
+    "FALLBACK",
+    "RESTART_BUDGET",
+    "SEED_ITERATIONS",
+    "RANDOM_SEEDS",
+    "RANDOM_SEED",
+    "STALL_PROGRESS",
+    "RETRY_CALLS",
+    "STALL_CALLS",
+    "SETTLED",
+    "STILL_CALLS",
+]
+
+RESTART_BUDGET: Final = 100
+"""Default most iterations (of any solver) one call spends on restarts, beyond the plain solve:
+ten plain solves at the default 10 iterations a tick. A search that needs more goes on at the
+next call with the same target."""
+
+SEED_ITERATIONS: Final = 50
+"""Most iterations one restart runs in one go, so a seed that crawls cannot eat the budget."""
+
+STALL_CALLS: Final = 20
+"""Calls on one target still ``PROCESSING`` after which the solve counts as stalled anyway.
+
+CCD on a long chain can creep toward a target for hundreds of iterations, gaining a little on
+every call; 20 calls is 83 ms at 240 ticks/s."""
+
+RETRY_CALLS: Final = 10
+"""Calls without a new search after the target moved away from one that had not arrived.
+
+A target that moves every tick makes every search start afresh; a solver that lags behind it
+(say CCD on a long chain) would otherwise pay the whole budget on every tick."""
+
+RANDOM_SEEDS: Final = 8
+"""Random poses (within the limits) tried after the deliberate seeds."""
+
+RANDOM_SEED: Final = 20091
+"""Seed of the generator that draws the random restarts, fresh for every search."""
+
+SETTLED: Final = 0.01
+"""A chain within this of a followed answer on every joint (radians, about 0.6 deg) has arrived:
+from then on the plain solve answers again."""
+
+STILL_CALLS: Final = 2
+"""Calls with one and the same target before restarts may go far from the stalled pose."""
+
+STALL_PROGRESS: Final = 0.01
+"""A solve still ``PROCESSING`` that gained less than this fraction of its start error stalled."""
+
+BACK_OFF: Final = 0.15
+"""The first restart moves every joint off its limits by this fraction of its range: the nearest
+pose where the joints pressed into their limits can move both ways."""
+
+ROUND_JOINTS: Final = 4
+"""Joints, from the base out, that get a seed taking them the other way round their limits."""
+
+FALLBACK: Final[Mapping[str, str]] = MappingProxyType(
+    {"ccd": "dls", "dls": "ccd", "fabrik": "dls", "jacobian_transpose": "dls"}
+)
+"""The solver each solver's restarts fall back on: another method is trapped elsewhere."""
+
+_TWO_PI: Final = 2.0 * math.pi
+
+
+@dataclass(frozen=True, eq=False)
+class _Answer:
+    """A cached answer: its angles (read-only, and as floats), the target (px) and chain it was
+    solved for, its error (px) and status."""
+
+    angles: np.ndarray
+    listed: list[float]
+    target: tuple[float, float]
+    chain: FloatChain
+    error: float
+    status: SolveStatus
+    followed: bool
+    """Found by a far restart: followed while it reaches, wherever the chain is on its way."""
+
+
+class RobustSolver:
+    """One chain's solver with recovery from stalls and a cache; call :meth:`solve` every tick.
+
+    Keep one per chain: it remembers the last answer and any search in progress. Change the
+    skeleton (for example ``robust.skeleton = robust.skeleton.moved_to(base)`` when the base
+    moves) or ``robust.solver_name`` at any time; :meth:`reset` forgets the cache (say, to
+    re-solve a chain that is physically blocked from reaching its answer).
+
+    >>> arm = Skeleton.chain([100, 80, 60], limits=[(-0.52, 2.09), (0.17, 2.97), (-2.97, -0.17)])
+    >>> robust = RobustSolver(arm, "ccd")
+    >>> pose = arm.lower  # the base on its stop; the target is the long way round
+    >>> for tick in range(3):
+    ...     sol = robust.solve(pose, (-150.0, 20.0), max_iterations=10, tolerance=0.5)
+    ...     pose = sol.angles
+    >>> sol.status.value, sol.error <= 0.5
+    ('success', True)
+    >>> robust.solve(pose, (-150.0, 20.0), max_iterations=10, tolerance=0.5).iterations
+    0
+    """
+
+    def __init__(
+        self, skeleton: Skeleton, solver_name: str = "ccd", *, budget: int = RESTART_BUDGET
+    ) -> None:
+        if isinstance(budget, bool) or not isinstance(budget, int | np.integer) or budget < 0:
+            raise ValueError(f"budget must be an integer >= 0 iterations, got {budget!r}")
+        self.budget = int(budget)
+        self._skeleton = skeleton
+        self._chain = FloatChain(skeleton)
+        self._reach = skeleton.reach
+        self._name = ""
+        self._solve: Solver = get_solver(solver_name)
+        self._fallback: Solver = self._solve
+        self.solver_name = solver_name
+
+    @property
+    def skeleton(self) -> Skeleton:
+        """The chain being solved; set it when the base moves (the cache is checked against it)."""
+        return self._skeleton
+
+    @skeleton.setter
+    def skeleton(self, skeleton: Skeleton) -> None:
+        old = self._skeleton
+        same_shape = skeleton.lengths is old.lengths or (
+            np.array_equal(skeleton.lengths, old.lengths)
+            and np.array_equal(skeleton.parents, old.parents)
+            and np.array_equal(skeleton.lower, old.lower)
+            and np.array_equal(skeleton.upper, old.upper)
+        )
+        self._skeleton = skeleton
+        unmoved = skeleton.base_angle == old.base_angle and np.array_equal(skeleton.base, old.base)
+        if same_shape and unmoved:
+            return
+        if same_shape:
+            # Only the base moved: the float copies of lengths and limits still hold.
+            chain = copy.copy(self._chain)
+            chain.base_x, chain.base_y = (float(v) for v in skeleton.base)
+            chain.base_angle = skeleton.base_angle
+            self._chain = chain
+        else:
+            self._chain = FloatChain(skeleton)
+            self._reach = skeleton.reach
+            self.reset()
+
+    @property
+    def solver_name(self) -> str:
+        """The raw solver's name (``ccd``, ``dls``, ``fabrik``, ``jacobian_transpose``)."""
+        return self._name
+
+    @solver_name.setter
+    def solver_name(self, name: str) -> None:
+        self._solve = get_solver(name)
+        self._fallback = get_solver(FALLBACK[name])
+        self._name = name
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget the cached answer and any search in progress."""
+        self._answer: _Answer | None = None
+        self._search: _Search | None = None
+        self._quiet = 0
+        self._pending: tuple[float, float] | None = None
+        self._waiting = 0
+
+    def solve(
+        self,
+        angles: np.ndarray,
+        target: np.ndarray,
+        *,
+        max_iterations: int = 10,
+        tolerance: float = 1.0,
+    ) -> Solution:
+        """Desired angles toward ``target`` (px), warm-started from the measured ``angles``.
+
+        ``max_iterations`` bounds the plain solve; restarts add at most ``budget`` iterations;
+        ``Solution.iterations`` counts both. Answers that are cached come back read-only.
+        """
+        tol = _check_settings(max_iterations, tolerance)
+        measured = _angles_list(angles, self._skeleton.count)
+        goal = _point(target)
+        cached = self._cached(measured, goal, tol)
+        if cached is not None:
+            return cached
+        if goal == self._pending:
+            self._waiting += 1
+        else:
+            self._pending, self._waiting = goal, 0
+        stretched = self._stretched(goal, tol)
+        if stretched is not None:
+            return self._keep(stretched, goal, followed=False)
+        start = np.array(measured)
+        plain = self._solve(
+            self._skeleton, start, goal, max_iterations=max_iterations, tolerance=tol
+        )
+        if plain.status is SolveStatus.SUCCESS:
+            # Arriving from where an unfinished search left the chain is that search's answer.
+            search = self._search
+            followed = (
+                search is not None and search.aims_at(np.array(goal), tol) and search.best_far
+            )
+            return self._keep(plain, goal, followed)
+        return self._recover(start, plain, goal, tol)
+
+    def _cached(
+        self, measured: list[float], goal: tuple[float, float], tol: float
+    ) -> Solution | None:
+        """The cached answer if it still serves, else None.
+
+        An answer a restart from a far seed found is followed while it reaches the goal and the
+        chain is on its way there: solving from the measured pose half way could fall back into
+        the trap, or take the other branch. Once the chain is within ``SETTLED`` of it on every
+        joint, the plain solve takes over again, from the measured pose: re-solving from where
+        the motors actually hold the chain (sagging under gravity, say) is what brings the end
+        effector the last pixels. The best pose for a goal no pose reaches is returned for as
+        long as the goal stays the same.
+        """
+        answer = self._answer
+        if answer is None:
+            return None
+        chain = self._chain
+        same = answer.chain is chain and answer.target == goal
+        if same and answer.status is SolveStatus.FAILURE:
+            return Solution(answer.angles, SolveStatus.FAILURE, 0, answer.error)
+        if not answer.followed:
+            return None
+        if _within(chain, measured, answer.listed):
+            self._answer = replace(answer, followed=False)
+            return None
+        error = answer.error if same else math.sqrt(chain.error_sqr(answer.listed, *goal))
+        if error > tol:
+            return None
+        return Solution(answer.angles, SolveStatus.SUCCESS, 0, error)
+
+    def _stretched(self, goal: tuple[float, float], tol: float) -> Solution | None:
+        """The chain stretched toward a goal at or beyond its reach, when the limits allow it."""
+        chain = self._chain
+        beyond = math.hypot(goal[0] - chain.base_x, goal[1] - chain.base_y) - self._reach
+        if beyond < 0.0:
+            return None
+        stretched = _stretched_toward(self._skeleton, np.array(goal))
+        error = math.sqrt(chain.error_sqr(stretched.tolist(), *goal))
+        # Only the straight chain aimed at the target comes this close; limits may forbid it.
+        if error > beyond + 1e-9 * self._reach:
+            return None
+        status = SolveStatus.SUCCESS if error <= tol else SolveStatus.FAILURE
+        return Solution(stretched, status, 0, error)
+
+    def _recover(
+        self, start: np.ndarray, plain: Solution, goal: tuple[float, float], tol: float
+    ) -> Solution:
+        """After a plain solve that fell short: search when it stalled, keep the best."""
+        skeleton = self._skeleton
+        before = math.sqrt(self._chain.error_sqr(skeleton.clamp(start).tolist(), *goal))
+        stalled = (
+            plain.status is SolveStatus.FAILURE
+            or before - plain.error < STALL_PROGRESS * before
+            or self._waiting >= STALL_CALLS
+        )
+        target = np.array(goal)
+        search = self._search
+        if search is not None and not search.aims_at(target, tol):
+            # The target moved on before the search arrived: wait before the next one.
+            search = self._search = None
+            self._quiet = RETRY_CALLS
+        if search is None and (not stalled or self._quiet > 0):
+            self._quiet = max(self._quiet - 1, 0)
+            return plain
+        if search is None:
+            search = self._search = _Search(
+                skeleton, self._solve, self._fallback, plain.angles, target, tol
+            )
+        # Far restarts only for a target that holds still: while it moves, an answer that
+        # swings the chain round would be stale before the chain got there.
+        search.far = self._waiting >= STILL_CALLS
+        used = search.run(skeleton, target, tol, self.budget)
+        best = plain
+        if search.best is not None:
+            found_error = _error(skeleton, search.best, target)
+            if found_error < plain.error:
+                best = Solution(search.best, plain.status, 0, found_error)
+        iterations = plain.iterations + used
+        if best.error <= tol or search.exhausted:
+            status = SolveStatus.SUCCESS if best.error <= tol else SolveStatus.FAILURE
+            followed = best is not plain and search.best_far
+            return self._keep(Solution(best.angles, status, iterations, best.error), goal, followed)
+        return Solution(best.angles, SolveStatus.PROCESSING, iterations, best.error)
+
+    def _keep(self, solution: Solution, goal: tuple[float, float], followed: bool) -> Solution:
+        """Cache ``solution`` (an arrival, or the best there is) and return it read-only."""
+        # Every solver returns a new array, so it can be frozen and shared rather than copied.
+        angles = solution.angles
+        angles.setflags(write=False)
+        self._answer = _Answer(
+            angles, angles.tolist(), goal, self._chain, solution.error, solution.status, followed
+        )
+        self._search = None
+        return solution
+
+
+class _Search:
+    """Restarts for one target, resumable from call to call; remembers the best pose found.
+
+    The near seeds are always tried; the far ones only while ``far`` is set.
+    """
+
+    def __init__(
+        self,
+        skeleton: Skeleton,
+        solve: Solver,
+        fallback: Solver,
+        stalled: np.ndarray,
+        target: np.ndarray,
+        tolerance: float,
+    ) -> None:
+        self.target = target.copy()
+        self.tolerance = tolerance
+        self.stalled = stalled
+        self.far = False
+        self.best: np.ndarray | None = None
+        self.best_far = False
+        self._best_error = math.inf
+        # Each entry: a start pose, the solvers still to run from it one after the other, and
+        # whether it is a far seed.
+        self._queue: deque[tuple[np.ndarray, tuple[Solver, ...], bool]] = deque()
+        self._near: Iterator[tuple[np.ndarray, tuple[Solver, ...]]] | None = _near_seeds(
+            skeleton, solve, stalled
+        )
+        self._far: Iterator[tuple[np.ndarray, tuple[Solver, ...]]] | None = _far_seeds(
+            skeleton, solve, fallback, stalled, target
+        )
+
+    @property
+    def exhausted(self) -> bool:
+        """True once every seed, far ones included, has been tried."""
+        return not self._queue and self._near is None and self._far is None
+
+    def aims_at(self, goal: np.ndarray, tolerance: float) -> bool:
+        """Whether this search serves ``goal``: the same target, to within the tolerance."""
+        return tolerance == self.tolerance and math.hypot(*(goal - self.target)) <= tolerance
+
+    def run(self, skeleton: Skeleton, goal: np.ndarray, tolerance: float, budget: int) -> int:
+        """Try seeds until one arrives, none are left, or ``budget`` iterations are spent."""
+        used = 0
+        while used < budget and self._best_error > tolerance:
+            entry = self._next()
+            if entry is None:
+                break
+            angles, solvers, far = entry
+            for index, solver in enumerate(solvers):
+                allowed = min(SEED_ITERATIONS, budget - used)
+                if allowed < 1:
+                    self._queue.appendleft((angles, solvers[index:], far))
+                    return used
+                sol = solver(skeleton, angles, goal, max_iterations=allowed, tolerance=tolerance)
+                used += sol.iterations
+                if sol.error < self._best_error:
+                    self.best, self.best_far, self._best_error = sol.angles, far, sol.error
+                if sol.status is SolveStatus.SUCCESS:
+                    return used
+                angles = sol.angles
+        return used
+
+    def _next(self) -> tuple[np.ndarray, tuple[Solver, ...], bool] | None:
+        if self._queue:
+            return self._queue.popleft()
+        if self._near is not None:
+            seed = next(self._near, None)
+            if seed is not None:
+                return (*seed, False)
+            self._near = None
+        if self._far is not None and self.far:
+            seed = next(self._far, None)
+            if seed is not None:
+                return (*seed, True)
+            self._far = None
+        return None
+
+
+def _near_seeds(
+    skeleton: Skeleton, solve: Solver, stalled: np.ndarray
+) -> Iterator[tuple[np.ndarray, tuple[Solver, ...]]]:
+    """Restarts next to the stalled pose, by damped least squares: its steps are the shortest
+    that move the end effector, so it finds the answer nearest the pose (CCD would turn the last
+    joints first, whatever the distance)."""
+    if solve is not solve_dls:
+        yield stalled, (solve_dls,)
+    yield _backed_off(skeleton, stalled), (solve_dls,)
+
+
+def _far_seeds(
+    skeleton: Skeleton, solve: Solver, fallback: Solver, stalled: np.ndarray, target: np.ndarray
+) -> Iterator[tuple[np.ndarray, tuple[Solver, ...]]]:
+    """Restarts elsewhere in the joints' ranges, each run by the solver then its fallback."""
+    both = (solve, fallback)
+    points = _chain_points(skeleton, stalled)
+    for j in range(min(ROUND_JOINTS, skeleton.count)):
+        round_the_limit = _the_other_way_round(skeleton, stalled, points, j, target)
+        if round_the_limit is not None:
+            yield round_the_limit, both
+    heading = math.atan2(*(target - skeleton.base)[::-1]) - skeleton.base_angle
+    mirrored = -stalled
+    mirrored[0] = 2.0 * heading - stalled[0]
+    yield _aimed(skeleton, skeleton.clamp(mirrored), target), both
+    bends_reversed = -stalled
+    bends_reversed[0] = stalled[0]
+    yield _aimed(skeleton, skeleton.clamp(bends_reversed), target), both
+    yield _stretched_toward(skeleton, target), both
+    yield _aimed(skeleton, _middle(skeleton), target), both
+    rng = np.random.default_rng(RANDOM_SEED)
+    low = np.maximum(skeleton.lower, -math.pi)
+    high = np.minimum(skeleton.upper, math.pi)
+    for _ in range(RANDOM_SEEDS):
+        yield _aimed(skeleton, rng.uniform(low, high), target), both
+
+
+def _the_other_way_round(
+    skeleton: Skeleton, angles: np.ndarray, points: np.ndarray, j: int, target: np.ndarray
+) -> np.ndarray | None:
+    """``angles`` with joint ``j`` turned to aim the end at the target the way its limits allow.
+
+    None when the short way is allowed anyway (the solver would have taken it) or the joint is
+    free. When neither way reaches the aim, the joint goes to its other limit, as far round as
+    it can.
+    """
+    low, high = skeleton.lower[j], skeleton.upper[j]
+    if not skeleton.limited[j]:
+        return None
+    arm = points[-1] - points[j]
+    to_target = target - points[j]
+    turn = math.atan2(arm[0] * to_target[1] - arm[1] * to_target[0], arm @ to_target)
+    wanted = angles[j] + turn
+    if low <= wanted <= high:
+        return None
+    seed = angles.copy()
+    for other in (wanted - _TWO_PI, wanted + _TWO_PI):
+        if low <= other <= high:
+            seed[j] = other
+            return seed
+    seed[j] = low if wanted > high else high
+    return seed if math.isfinite(seed[j]) else None
+
+
+def _backed_off(skeleton: Skeleton, angles: np.ndarray) -> np.ndarray:
+    """``angles`` with every joint moved ``BACK_OFF`` of its range away from its limits."""
+    low = np.maximum(skeleton.lower, -math.pi)
+    high = np.minimum(skeleton.upper, math.pi)
+    margin = BACK_OFF * (high - low)
+    return np.clip(angles, low + margin, high - margin)
+
+
+def _middle(skeleton: Skeleton) -> np.ndarray:
+    """Each joint in the middle of its range within [-pi, pi] (a free joint at 0), radians."""
+    return 0.5 * (np.maximum(skeleton.lower, -math.pi) + np.minimum(skeleton.upper, math.pi))
+
+
+def _stretched_toward(skeleton: Skeleton, target: np.ndarray) -> np.ndarray:
+    """The chain as straight as its limits allow, its base joint aimed at the target, radians."""
+    return _aimed(skeleton, skeleton.clamp(np.zeros(skeleton.count)), target)
+
+
+def _aimed(skeleton: Skeleton, angles: np.ndarray, target: np.ndarray) -> np.ndarray:
+    """``angles`` with the base joint turned so the base-to-end line points at the target.
+
+    The turn goes whichever way round the base joint's limits allow; ``angles`` (within the
+    limits) are returned as they are when neither way does.
+    """
+    end = _chain_points(skeleton, angles)[-1] - skeleton.base
+    to_target = target - skeleton.base
+    turn = math.atan2(end[0] * to_target[1] - end[1] * to_target[0], end @ to_target)
+    wanted = wrap_angle(angles[0] + turn)
+    low, high = skeleton.lower[0], skeleton.upper[0]
+    choices = [c for c in (wanted, wanted - _TWO_PI, wanted + _TWO_PI) if low <= c <= high]
+    if not choices:
+        # Clamping the aim would pile every seed onto one limit; keep the seed's own variety.
+        return angles
+    aimed = angles.copy()
+    aimed[0] = min(choices, key=lambda c: abs(c - angles[0]))
+    return aimed
+
+
+def _angles_list(angles: object, count: int) -> list[float]:
+    """``angles`` as a list of floats, or ``ValueError`` (as :func:`check_angles` words it).
+
+    The common case, a float array of the right shape, is checked without numpy's per-call
+    overhead: this runs every tick.
+    """
+    if isinstance(angles, np.ndarray) and angles.shape == (count,) and angles.dtype == float:
+        listed = angles.tolist()
+        if all(map(math.isfinite, listed)):
+            return listed
+    return check_angles(angles, count).tolist()
+
+
+def _point(point: object) -> tuple[float, float]:
+    """``point`` as two finite floats, px, or ``ValueError`` (as :func:`check_point` words it)."""
+    if isinstance(point, np.ndarray) and point.shape == (2,) and point.dtype == float:
+        x, y = point.tolist()
+    elif isinstance(point, tuple) and len(point) == 2 and all(type(v) is float for v in point):
+        x, y = point
+    else:
+        x, y = check_point(point).tolist()
+    if not (math.isfinite(x) and math.isfinite(y)):
+        x, y = check_point(point).tolist()
+    return x, y
+
+
+def _within(chain: FloatChain, measured: list[float], answer: list[float]) -> bool:
+    """Whether every joint of ``measured`` is within ``SETTLED`` of ``answer`` (a free joint the
+    short way round)."""
+    for m, a, free in zip(measured, answer, chain.free, strict=True):
+        gap = abs(m - a)
+        if gap > SETTLED and not (free and abs(wrap_angle(m - a)) <= SETTLED):
+            return False
+    return True
+
+
+def _error(skeleton: Skeleton, angles: np.ndarray, target: np.ndarray) -> float:
+    end = _chain_points(skeleton, angles)[-1]
+    return math.hypot(float(end[0] - target[0]), float(end[1] - target[1]))

@@ -1,0 +1,429 @@
+"""RobustSolver: restarts that get every solver out of limit traps, the cache, the hysteresis.
+
+Reachable targets are the forward kinematics of poses drawn inside the limits, so some pose
+within the limits reaches each one exactly. Every random draw comes from a seeded generator.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from ikgame.kinematics import (
+    SOLVERS,
+    RobustSolver,
+    Skeleton,
+    SolveStatus,
+    forward_kinematics,
+)
+from ikgame.kinematics.recovery import RESTART_BUDGET, STILL_CALLS
+
+PI = math.pi
+NAMES = sorted(SOLVERS)
+TOLERANCE = 0.5
+r = math.radians
+
+
+def _end(skeleton: Skeleton, angles: np.ndarray) -> np.ndarray:
+    return forward_kinematics(skeleton, angles)[0][-1]
+
+
+def _limit(rng: np.random.Generator) -> tuple[float, float] | None:
+    """Free, wide, tight (a few degrees) or one-sided limits, radians."""
+    kind = rng.integers(5)
+    if kind == 0:
+        return None
+    if kind == 1:
+        half = rng.uniform(r(30), r(170))
+        return (-half, half)
+    if kind == 2:
+        half = rng.uniform(r(3), r(15))
+        return (-half, half)
+    near, far = rng.uniform(r(5), r(30)), rng.uniform(r(90), r(170))
+    return (near, far) if kind == 3 else (-far, -near)
+
+
+def _in_limits(rng: np.random.Generator, skeleton: Skeleton) -> np.ndarray:
+    return rng.uniform(np.maximum(skeleton.lower, -PI), np.minimum(skeleton.upper, PI))
+
+
+def _case(rng: np.random.Generator) -> tuple[Skeleton, np.ndarray, np.ndarray]:
+    """A chain of 1 to 30 links, a start (straight, coiled against its limits or anywhere) and a
+    reachable target."""
+    n = int(rng.integers(1, 31))
+    chain = Skeleton.chain(
+        rng.uniform(10.0, 100.0, n),
+        base=rng.uniform(-200.0, 200.0, 2),
+        base_angle=rng.uniform(-PI, PI),
+        limits=[_limit(rng) for _ in range(n)],
+    )
+    target = _end(chain, _in_limits(rng, chain))
+    start = [
+        chain.clamp(np.zeros(n)),
+        np.maximum(chain.lower, -2.8),
+        np.minimum(chain.upper, 2.8),
+        _in_limits(rng, chain),
+    ][rng.integers(4)]
+    return chain, start, target
+
+
+def _tick_by_tick(robust: RobustSolver, start: np.ndarray, target, calls: int = 60):
+    """Solve as a controller does without physics: each call starts from the last answer."""
+    angles = start
+    for _ in range(calls):
+        sol = robust.solve(angles, target, max_iterations=10, tolerance=TOLERANCE)
+        assert np.all(sol.angles >= robust.skeleton.lower)
+        assert np.all(sol.angles <= robust.skeleton.upper)
+        assert sol.error == pytest.approx(np.hypot(*(_end(robust.skeleton, sol.angles) - target)))
+        angles = sol.angles
+        if sol.status is not SolveStatus.PROCESSING:
+            break
+    return sol
+
+
+# -- reaching what is reachable -----------------------------------------------------------------
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_every_reachable_target_is_reached_within_the_limits(name):
+    rng = np.random.default_rng(2026)
+    missed = []
+    for case in range(150):
+        chain, start, target = _case(rng)
+        sol = _tick_by_tick(RobustSolver(chain, name), start, target)
+        if sol.status is not SolveStatus.SUCCESS:
+            missed.append((case, chain.count, sol.status.value, sol.error))
+    assert missed == []
+
+
+def _elbow_arm() -> tuple[Skeleton, np.ndarray]:
+    """The base limited to [-30, 120] deg, an elbow bending one way only, a wrist the other; a
+    target behind the arm that needs the base at +100 deg."""
+    arm = Skeleton.chain(
+        [120.0, 100.0, 80.0], limits=[(r(-30), r(120)), (r(10), r(170)), (r(-170), r(-10))]
+    )
+    return arm, _end(arm, np.array([r(100), r(120), r(-30)]))
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_the_base_goes_the_long_way_round_its_stop(name):
+    arm, target = _elbow_arm()
+    # A trap for every raw solver: from the -30 deg stop the short way round is through it.
+    raw = SOLVERS[name](arm, arm.lower, target, max_iterations=1000, tolerance=TOLERANCE)
+    assert raw.status is SolveStatus.FAILURE
+    robust = RobustSolver(arm, name)
+    angles = arm.lower
+    # Restarts far from the stall wait until the target has held still for STILL_CALLS calls.
+    for _ in range(STILL_CALLS + 1):
+        sol = robust.solve(angles, target, max_iterations=10, tolerance=TOLERANCE)
+        assert sol.iterations <= 10 + RESTART_BUDGET
+        angles = sol.angles
+    assert sol.status is SolveStatus.SUCCESS
+    assert sol.angles[0] > r(90)
+
+
+def test_a_light_chain_coiled_into_its_limits_uncoils():
+    # Eight links limited to +-160 deg, all curled onto the +160 stop: CCD alone ends short.
+    chain = Skeleton.chain([30.0] * 8, base_angle=PI / 2, limits=[(r(-160), r(160))] * 8)
+    rng = np.random.default_rng(7)
+    start = np.full(8, r(160))
+    trapped = 0
+    for _ in range(20):
+        target = _end(chain, _in_limits(rng, chain))
+        angles = start
+        for _ in range(100):
+            raw = SOLVERS["ccd"](chain, angles, target, max_iterations=10, tolerance=TOLERANCE)
+            angles = raw.angles
+        trapped += raw.status is not SolveStatus.SUCCESS
+        sol = _tick_by_tick(RobustSolver(chain, "ccd"), start, target)
+        assert sol.status is SolveStatus.SUCCESS
+    assert trapped >= 5
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_tight_symmetric_limits(name):
+    rng = np.random.default_rng(10)
+    for _ in range(20):
+        n = int(rng.integers(2, 20))
+        chain = Skeleton.chain(rng.uniform(20.0, 60.0, n), limits=[(r(-10), r(10))] * n)
+        target = _end(chain, _in_limits(rng, chain))
+        assert _tick_by_tick(RobustSolver(chain, name), np.zeros(n), target).status is (
+            SolveStatus.SUCCESS
+        )
+
+
+# -- what cannot be reached -------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_a_target_beyond_reach_fails_with_the_chain_stretched_toward_it(name):
+    chain = Skeleton.chain([60.0, 50.0, 40.0], base=(10.0, 10.0), limits=[None, (-2, 2), None])
+    robust = RobustSolver(chain, name)
+    target = np.array([10.0 - 300.0, 10.0 + 400.0])
+    sol = robust.solve(np.array([0.3, 1.0, -2.0]), target, tolerance=TOLERANCE)
+    assert sol.status is SolveStatus.FAILURE
+    np.testing.assert_allclose(sol.angles, [math.atan2(400.0, -300.0), 0.0, 0.0])
+    assert sol.error == pytest.approx(500.0 - 150.0)
+    again = robust.solve(sol.angles, target, tolerance=TOLERANCE)
+    assert (again.status, again.iterations) == (SolveStatus.FAILURE, 0)
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_a_target_the_limits_keep_out_of_reach_fails_once_then_costs_nothing(name):
+    # Within the reach's distance, but the base turns only in [0, 0.5] rad and the target is
+    # behind it: after the search the best pose is cached with FAILURE.
+    chain = Skeleton.chain([100.0, 50.0], limits=[(0.0, 0.5), (-0.2, 0.2)])
+    robust = RobustSolver(chain, name)
+    target = np.array([-100.0, -20.0])
+    sol = _tick_by_tick(robust, np.zeros(2), target)
+    assert sol.status is SolveStatus.FAILURE
+    assert np.all(sol.angles >= chain.lower) and np.all(sol.angles <= chain.upper)
+    best = min(
+        np.hypot(*(_end(chain, np.array([a, b])) - target))
+        for a in np.linspace(0.0, 0.5, 51)
+        for b in np.linspace(-0.2, 0.2, 41)
+    )
+    assert sol.error <= best + 1e-6
+    again = robust.solve(sol.angles, target, tolerance=TOLERANCE)
+    assert (again.status, again.iterations, again.error) == (SolveStatus.FAILURE, 0, sol.error)
+
+
+# -- the cost: the common case, the cache, the budget -------------------------------------------
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_a_plain_solve_that_arrives_is_returned_as_it_is(name):
+    # The common case costs what the raw solver costs: no restarts, the same iterations.
+    rng = np.random.default_rng(5)
+    for _ in range(30):
+        chain, start, target = _case(rng)
+        raw = SOLVERS[name](chain, start, target, max_iterations=10, tolerance=TOLERANCE)
+        if raw.status is not SolveStatus.SUCCESS:
+            continue
+        sol = RobustSolver(chain, name).solve(start, target, max_iterations=10, tolerance=TOLERANCE)
+        assert sol.status is SolveStatus.SUCCESS
+        if np.hypot(*(target - chain.base)) >= chain.reach:
+            # A one-link chain's target lies at full reach: the stretched pose is the answer.
+            assert sol.iterations == 0
+            continue
+        assert sol.iterations == raw.iterations
+        np.testing.assert_allclose(sol.angles, raw.angles, atol=1e-12)
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_a_settled_chain_costs_no_iterations(name):
+    rng = np.random.default_rng(6)
+    for _ in range(20):
+        chain, start, target = _case(rng)
+        robust = RobustSolver(chain, name)
+        sol = _tick_by_tick(robust, start, target)
+        assert sol.status is SolveStatus.SUCCESS
+        for _ in range(3):
+            again = robust.solve(sol.angles, target, max_iterations=10, tolerance=TOLERANCE)
+            assert again.iterations == 0
+            np.testing.assert_array_equal(again.angles, sol.angles)
+
+
+@pytest.mark.parametrize("budget", [0, 5, 40])
+def test_the_budget_bounds_every_call_and_a_search_carries_on(budget):
+    arm, target = _elbow_arm()
+    robust = RobustSolver(arm, "ccd", budget=budget)
+    angles = arm.lower
+    for _ in range(100):
+        sol = robust.solve(angles, target, max_iterations=10, tolerance=TOLERANCE)
+        assert sol.iterations <= 10 + budget
+        angles = sol.angles
+    if budget:
+        assert sol.status is SolveStatus.SUCCESS
+    else:
+        assert sol.status is not SolveStatus.SUCCESS
+
+
+def test_a_bad_budget_is_refused():
+    with pytest.raises(ValueError, match="budget must be an integer >= 0 iterations, got -1"):
+        RobustSolver(Skeleton.chain([1.0]), "ccd", budget=-1)
+
+
+def test_an_unknown_solver_is_refused():
+    with pytest.raises(ValueError, match="unknown solver 'x'"):
+        RobustSolver(Skeleton.chain([1.0]), "x")
+
+
+# -- branches: near answers, no flipping -------------------------------------------------------
+
+
+def test_an_answer_found_from_a_far_seed_is_followed_all_the_way_there():
+    # Half way from the trap to such an answer, the plain solve from the measured pose could
+    # fall back into the trap or take another branch, so the answer is kept.
+    rng = np.random.default_rng(2026)
+    followed = 0
+    for _ in range(150):
+        chain, start, target = _case(rng)
+        robust = RobustSolver(chain, "ccd")
+        answer = _tick_by_tick(robust, start, target)
+        if not robust._answer.followed:
+            continue
+        followed += 1
+        for share in np.linspace(0.0, 1.0, 5):
+            measured = chain.clamp((1 - share) * start + share * answer.angles)
+            sol = robust.solve(measured, target, tolerance=TOLERANCE)
+            assert sol.iterations == 0
+            np.testing.assert_array_equal(sol.angles, answer.angles)
+    assert followed >= 3
+
+
+def test_a_plain_answer_is_solved_again_until_the_chain_settles_on_it():
+    # Elbow up and elbow down both reach; the answer follows the measured pose (the nearest
+    # one), as the raw solver's would, until the chain has settled.
+    chain = Skeleton.chain([100.0, 100.0])
+    target = np.array([120.0, 60.0])
+    robust = RobustSolver(chain, "dls")
+    up = robust.solve(np.array([0.0, 1.0]), target, tolerance=TOLERANCE)
+    assert up.status is SolveStatus.SUCCESS and up.angles[1] > 0
+    down = robust.solve(np.array([1.0, -1.0]), target, tolerance=TOLERANCE)
+    assert down.status is SolveStatus.SUCCESS and down.angles[1] < 0
+    assert robust.solve(down.angles, target, tolerance=TOLERANCE).iterations == 0
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_a_moving_target_is_followed_without_jumps(name):
+    chain = Skeleton.chain([80.0, 70.0, 60.0], limits=[(r(-170), r(170))] * 3)
+    robust = RobustSolver(chain, name)
+    angles = robust.solve(np.full(3, 0.3), (160.0, 0.0), max_iterations=100).angles
+    for tick in range(1, 480):
+        phase = 2 * PI * tick / 480
+        target = (130.0 + 30.0 * math.cos(phase), 30.0 * math.sin(phase))
+        sol = robust.solve(angles, target, max_iterations=10, tolerance=TOLERANCE)
+        assert sol.status is SolveStatus.SUCCESS
+        # The target moves 0.4 px a tick; a change of branch would swing a joint by radians.
+        assert np.abs(sol.angles - angles).max() < 0.3
+        angles = sol.angles
+
+
+# -- state, skeleton changes, determinism --------------------------------------------------------
+
+
+def test_a_moved_base_is_solved_again():
+    chain = Skeleton.chain([100.0, 80.0])
+    robust = RobustSolver(chain, "ccd")
+    target = (90.0, 90.0)
+    sol = robust.solve(np.array([0.5, 0.5]), target, tolerance=TOLERANCE)
+    robust.skeleton = chain.moved_to((5.0, 0.0))
+    moved = robust.solve(sol.angles, target, tolerance=TOLERANCE)
+    assert moved.iterations > 0
+    assert moved.status is SolveStatus.SUCCESS
+    assert np.hypot(*(_end(robust.skeleton, moved.angles) - target)) <= TOLERANCE
+
+
+def test_switching_solver_or_reset_forgets_the_answer():
+    arm, target = _elbow_arm()
+    robust = RobustSolver(arm, "ccd")
+    sol = _tick_by_tick(robust, arm.lower, target)
+    assert robust.solve(sol.angles, target, tolerance=TOLERANCE).iterations == 0
+    robust.solver_name = "fabrik"
+    assert robust.solver_name == "fabrik"
+    assert robust.solve(arm.lower, target, tolerance=TOLERANCE).iterations > 0
+    robust.reset()
+    assert robust.solve(sol.angles, target, tolerance=TOLERANCE).iterations == 0
+    robust.reset()
+    assert robust.solve(arm.lower, target, tolerance=TOLERANCE).iterations > 0
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_the_same_calls_give_the_same_answers(name):
+    rng = np.random.default_rng(8)
+    arm, target = _elbow_arm()
+    for chain, start, goal in [_case(rng) for _ in range(10)] + [(arm, arm.lower, target)]:
+        runs = []
+        for _ in range(2):
+            robust = RobustSolver(chain, name)
+            answers = [robust.solve(start, goal, max_iterations=5, tolerance=TOLERANCE)]
+            answers.append(robust.solve(answers[-1].angles, goal, max_iterations=5))
+            runs.append(answers)
+        for first, again in zip(*runs, strict=True):
+            np.testing.assert_array_equal(first.angles, again.angles)
+            assert (first.status, first.iterations, first.error) == (
+                again.status,
+                again.iterations,
+                again.error,
+            )
+
+
+@pytest.mark.parametrize(
+    ("call", "message"),
+    [
+        ({"angles": np.zeros(3)}, "angles must have shape (2,), got shape (3,)"),
+        ({"angles": [0.0, math.nan]}, "angles must be finite, got [0.0, nan]"),
+        ({"target": (1.0, 2.0, 3.0)}, "target must have shape (2,), got shape (3,)"),
+        ({"target": (math.inf, 0.0)}, "target must be finite, got [inf, 0.0]"),
+        ({"target": "up"}, "target must be a pair of numbers (x, y), got 'up'"),
+        ({"max_iterations": 0}, "max_iterations must be an integer >= 1, got 0"),
+        ({"tolerance": -1.0}, "tolerance must be finite and >= 0 px, got -1.0"),
+    ],
+    ids=repr,
+)
+def test_bad_input_is_named_in_the_message(call, message):
+    robust = RobustSolver(Skeleton.chain([100.0, 100.0]), "ccd")
+    # Also with a cached answer, which the checks must not skip.
+    robust.solve(np.zeros(2), (0.0, 150.0), tolerance=TOLERANCE)
+    arguments = {"angles": np.zeros(2), "target": (0.0, 150.0)} | call
+    with pytest.raises(ValueError) as info:
+        robust.solve(arguments.pop("angles"), arguments.pop("target"), **arguments)
+    assert str(info.value) == message
+
+
+def test_a_cached_answer_cannot_be_changed_in_place():
+    arm, target = _elbow_arm()
+    robust = RobustSolver(arm, "ccd")
+    sol = _tick_by_tick(robust, arm.lower, target)
+    for answer in (sol, robust.solve(arm.lower, target, tolerance=TOLERANCE)):
+        with pytest.raises(ValueError):
+            answer.angles[0] = 0.0
+
+
+def test_another_chain_forgets_the_answer():
+    robust = RobustSolver(Skeleton.chain([100.0, 80.0]), "fabrik")
+    sol = robust.solve(np.array([0.5, 0.5]), (90.0, 90.0), tolerance=TOLERANCE)
+    robust.skeleton = Skeleton.chain([60.0, 60.0])
+    again = robust.solve(sol.angles, (90.0, 20.0), tolerance=TOLERANCE)
+    assert again.status is SolveStatus.SUCCESS
+    assert np.hypot(*(_end(robust.skeleton, again.angles) - (90.0, 20.0))) <= TOLERANCE
+    with pytest.raises(ValueError, match="angles must have shape"):
+        robust.solve(np.zeros(3), (90.0, 20.0))
+
+
+@pytest.mark.parametrize("name", NAMES)
+@settings(derandomize=True, deadline=None, max_examples=60)
+@given(
+    data=st.data(),
+    target=st.one_of(
+        st.tuples(st.floats(-3000.0, 3000.0), st.floats(-3000.0, 3000.0)),
+        st.sampled_from([(0.0, 0.0), (1e12, -1e12), (-1e-9, 1e-9)]),
+    ),
+    tolerance=st.sampled_from([0.0, 0.5, 5.0]),
+)
+def test_any_target_from_any_start_gives_a_sound_answer(name, data, target, tolerance):
+    # Reachable or not, on the base or absurdly far, from a start even past the limits.
+    seed = data.draw(st.integers(0, 2**32 - 1))
+    chain, _, _ = _case(np.random.default_rng(seed))
+    start = np.array(
+        data.draw(st.lists(st.floats(-10.0, 10.0), min_size=chain.count, max_size=chain.count))
+    )
+    robust = RobustSolver(chain, name, budget=40)
+    angles = start
+    for _ in range(3):
+        sol = robust.solve(angles, target, max_iterations=5, tolerance=tolerance)
+        assert np.all(np.isfinite(sol.angles))
+        assert np.all(sol.angles >= chain.lower) and np.all(sol.angles <= chain.upper)
+        measured = np.hypot(*(_end(chain, sol.angles) - target))
+        assert sol.error == pytest.approx(measured, rel=1e-9, abs=1e-6)
+        assert sol.iterations <= 5 + 40
+        if sol.status is SolveStatus.SUCCESS:
+            assert sol.error <= tolerance + 1e-9
+        else:
+            assert sol.error > tolerance - 1e-9
+        angles = sol.angles
