@@ -2,6 +2,10 @@
 
 Exit codes: 0 when the command did its job (a level that fails its script still ran fine),
 2 for bad input (a level file, an option), 1 for an internal error.
+
+Start-up time is most of a short command's time, so this module imports at the top only what
+building the parser needs; each command imports its own modules (the simulation, Pillow, rich,
+the comparison) when it runs, and ``ikgame --version`` loads none of them.
 """
 
 from __future__ import annotations
@@ -12,24 +16,18 @@ import sys
 import threading
 from collections.abc import Callable, Sequence
 from pathlib import Path
-
-from rich.console import Console
-from rich.markup import escape
-from rich.table import Table
+from typing import TYPE_CHECKING
 
 import ikgame
-from ikgame._files import write_atomic, write_json
-from ikgame._progress import progress_bar
-from ikgame.compare import compare_level, comparison_table, write_comparison
 from ikgame.level.library import DEFAULT_LEVEL, resolve_level
-from ikgame.level.loader import LevelError, Problem, level_theme, load_level
-from ikgame.level.model import SOLVER_NAMES, Level
-from ikgame.level.tools import level_rows, schema_text, validate_files
-from ikgame.render.export import check_out_dir, export_run, parse_size, write_motion
-from ikgame.render.theme import available_themes, load_theme
-from ikgame.render.video import check_video
-from ikgame.sim import RunResult, Simulation
-from ikgame.skins import skin_scene
+from ikgame.level.names import SOLVER_NAMES
+from ikgame.render.theme import available_themes
+
+if TYPE_CHECKING:
+    from rich.console import Console
+
+    from ikgame.level.model import Level
+    from ikgame.sim import RunResult
 
 __all__ = ["main"]
 
@@ -68,27 +66,38 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line with ``argv`` (default: ``sys.argv[1:]``); returns the exit code."""
     parser = _parser()
     args = parser.parse_args(argv)
-    err = Console(stderr=True, highlight=False)
     try:
         return args.handler(args)
-    except LevelError as exc:
+    except (Exception, KeyboardInterrupt) as exc:
+        return _report(exc, debug=getattr(args, "debug", False))
+
+
+def _report(exc: BaseException, *, debug: bool) -> int:
+    """Print what went wrong on stderr and return the exit code; re-raise with ``debug``."""
+    from rich.console import Console
+    from rich.markup import escape
+
+    from ikgame.level.loader import LevelError
+
+    err = Console(stderr=True, highlight=False)
+    if isinstance(exc, LevelError):
         for problem in exc.problems:
             err.print(f"[bold red]error:[/] {escape(str(problem))}", soft_wrap=True)
         return EXIT_BAD_INPUT
-    except UsageError as exc:
+    if isinstance(exc, UsageError):
         err.print(f"[bold red]error:[/] {escape(str(exc))}", soft_wrap=True)
         return EXIT_BAD_INPUT
-    except KeyboardInterrupt:
+    if isinstance(exc, KeyboardInterrupt):
         err.print("interrupted")
         return 130
-    except Exception as exc:  # the last line of defence: report, never a bare traceback
-        if getattr(args, "debug", False):
-            raise
-        err.print(
-            f"[bold red]internal error:[/] {type(exc).__name__}: {escape(str(exc))}", soft_wrap=True
-        )
-        err.print("rerun with --debug for the traceback, and please report it.")
-        return EXIT_INTERNAL
+    # The last line of defence: report, never a bare traceback.
+    if debug:
+        raise exc
+    err.print(
+        f"[bold red]internal error:[/] {type(exc).__name__}: {escape(str(exc))}", soft_wrap=True
+    )
+    err.print("rerun with --debug for the traceback, and please report it.")
+    return EXIT_INTERNAL
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -144,6 +153,14 @@ def _parser() -> argparse.ArgumentParser:
     )
     run.add_argument(
         "--workers", type=int, metavar="N", help="processes drawing frames (default: automatic)"
+    )
+    run.add_argument(
+        "--png-compression",
+        type=int,
+        default=1,
+        choices=range(10),
+        metavar="LEVEL",
+        help="zlib level 0..9 of the PNG files: 1 (default) is fast, 9 makes them smaller",
     )
     run.set_defaults(handler=_cmd_run)
 
@@ -212,6 +229,15 @@ def _slug(name: str) -> str:
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
+    from rich.console import Console
+
+    from ikgame._files import write_json
+    from ikgame._progress import progress_bar
+    from ikgame.level.loader import load_level
+    from ikgame.render.output import check_out_dir, parse_size
+    from ikgame.render.theme import load_theme
+    from ikgame.sim import Simulation
+
     level_path = resolve_level(args.level)
     level = load_level(level_path)
     out = args.out if args.out is not None else Path("runs") / _slug(level.level.name)
@@ -230,18 +256,28 @@ def _cmd_run(args: argparse.Namespace) -> int:
     if args.mp4:
         if args.no_frames:
             raise UsageError("--mp4: there are no pictures to encode with --no-frames")
+        from ikgame.render.video import check_video
+
         with _usage("--mp4"):
             check_video()
     console = Console(quiet=args.quiet, highlight=False)
     # Frames are recorded even without pictures: motion.json is written either way.
     sim = Simulation(level, solver=args.solver)
-    # Sprites are decoded before the run, so an image that cannot be used stops it at once.
-    scene = sim.scene if args.no_frames else skin_scene(sim.scene, level, level_path)
+    scene = sim.scene
+    if not args.no_frames:
+        from ikgame.skins import skin_scene
+
+        # Sprites are decoded before the run, so an image that cannot be used stops it at once.
+        scene = skin_scene(sim.scene, level, level_path)
     with progress_bar("simulating", 1.0, enabled=_interactive(console), console=console) as update:
         result = sim.run(update)
     if args.no_frames:
+        from ikgame.render.motion import write_motion
+
         written = [write_motion(out, scene, sim.snapshots)]
     else:
+        from ikgame.render.export import export_run
+
         written = export_run(
             out,
             scene,
@@ -254,6 +290,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
             mp4=args.mp4,
             workers=args.workers,
             progress=_interactive(console),
+            png_compression=args.png_compression,
         )
     written.append(write_json(out / "results.json", _results(result, level_path, args)))
     _print_summary(console, result, out, written)
@@ -261,6 +298,14 @@ def _cmd_run(args: argparse.Namespace) -> int:
 
 
 def _cmd_compare(args: argparse.Namespace) -> int:
+    from rich.console import Console
+    from rich.markup import escape
+
+    from ikgame._progress import progress_bar
+    from ikgame.compare import compare_level, comparison_table, write_comparison
+    from ikgame.level.loader import load_level
+    from ikgame.render.output import check_out_dir
+
     level = load_level(resolve_level(args.level))
     # Order kept, repeats dropped: "ccd,dls,ccd" compares two solvers.
     solvers = list(dict.fromkeys(name.strip() for name in args.solvers.split(",") if name.strip()))
@@ -283,6 +328,11 @@ def _cmd_compare(args: argparse.Namespace) -> int:
 
 
 def _cmd_validate(args: argparse.Namespace) -> int:
+    from rich.console import Console
+
+    from ikgame.level.loader import LevelError
+    from ikgame.level.tools import validate_files
+
     console = Console(quiet=args.quiet, highlight=False)
     paths = [resolve_level(name) for name in args.files]
     problems = validate_files(paths)
@@ -294,6 +344,11 @@ def _cmd_validate(args: argparse.Namespace) -> int:
 
 
 def _cmd_list(args: argparse.Namespace) -> int:
+    from rich.console import Console
+    from rich.markup import escape
+
+    from ikgame.level.tools import level_rows
+
     console = Console(highlight=False)
     for row in level_rows():
         ends = "" if row["expect"] == "passed" else f", meant to end {row['expect']}"
@@ -307,6 +362,9 @@ def _cmd_list(args: argparse.Namespace) -> int:
 
 
 def _cmd_schema(args: argparse.Namespace) -> int:
+    from ikgame._files import write_atomic
+    from ikgame.level.tools import schema_text
+
     text = schema_text()
     if args.out is None:
         sys.stdout.write(text)
@@ -317,6 +375,8 @@ def _cmd_schema(args: argparse.Namespace) -> int:
 
 def _level_theme(level: Level, level_path: Path) -> str | Path | None:
     """The level's own theme, with a bad one reported like any other level problem."""
+    from ikgame.level.loader import LevelError, Problem, level_theme
+
     try:
         return level_theme(level, level_path)
     except ValueError as exc:
@@ -337,6 +397,8 @@ class _usage:
         return None
 
     def __exit__(self, kind: type | None, exc: BaseException | None, tb: object) -> bool:
+        from ikgame.level.loader import LevelError
+
         if isinstance(exc, ValueError) and not isinstance(exc, UsageError | LevelError):
             raise UsageError(f"{self.option}: {exc}") from None
         return False
@@ -351,6 +413,9 @@ def _results(result: RunResult, level_path: Path, args: argparse.Namespace) -> d
 
 
 def _print_summary(console: Console, result: RunResult, out: Path, written: list[Path]) -> None:
+    from rich.markup import escape
+    from rich.table import Table
+
     colour = {"passed": "green", "failed": "yellow", "diverged": "red"}[result.status]
     expected = (
         "" if result.status == result.expect else f" [dim](designed to end {result.expect})[/]"
@@ -418,18 +483,27 @@ outputs whole. Needs the watch extra: python -m pip install 'ikgame[watch]'
 """
 
 
-def _live_commands(sub: argparse._SubParsersAction) -> None:
-    from ikgame.app.state import help_lines
+class _KeysHelp(argparse.RawDescriptionHelpFormatter):
+    """Fills the play command's key list in when its help is printed: the list lives with the
+    window's state, which imports the simulation and Pillow, too much for every start-up."""
 
+    def _fill_text(self, text: str, width: int, indent: str) -> str:
+        if "{keys}" in text:
+            from ikgame.app.state import help_lines
+
+            keys = "\n".join(f"  {keys:<14} {what}" for keys, what in help_lines())
+            text = text.replace("{keys}", keys)
+        return super()._fill_text(text, width, indent)
+
+
+def _live_commands(sub: argparse._SubParsersAction) -> None:
     play = sub.add_parser(
         "play",
         help="play a level live in a window: drag the target with the mouse",
         description="Run a level live in a window (pygame-ce) at its tick rate: drag the target "
         "with the mouse, pause, step, restart, switch solvers, toggle gravity, take screenshots.",
-        epilog=_PLAY_EPILOG.format(
-            keys="\n".join(f"  {keys:<14} {what}" for keys, what in help_lines())
-        ),
-        formatter_class=argparse.RawDescriptionHelpFormatter,
+        epilog=_PLAY_EPILOG,
+        formatter_class=_KeysHelp,
     )
     play.add_argument("level", nargs="?", metavar="LEVEL", help="a level file or shipped name")
     play.add_argument("--solver", choices=SOLVER_NAMES, help="IK solver to start with")
@@ -478,6 +552,8 @@ def _cmd_play(args: argparse.Namespace) -> int:
         _extra("watchfiles", "watch", "ikgame play --watch")
     from ikgame.app.state import PlayState
     from ikgame.app.window import NoDisplay, play
+    from ikgame.render.output import parse_size
+    from ikgame.render.theme import load_theme
 
     with _usage("--size"):
         size = parse_size(args.size)
@@ -508,7 +584,11 @@ def _cmd_watch(
     """``stop`` and ``ready`` let a caller other than the terminal end the watch and know when
     it is in place (see :func:`ikgame.app.watch.watch_level`)."""
     _extra("watchfiles", "watch", "ikgame watch")
+    from rich.console import Console
+    from rich.markup import escape
+
     from ikgame.app.watch import level_files, watch_level
+    from ikgame.level.tools import validate_files
 
     level_path = resolve_level(args.level)
     # Every run goes through the run command itself: same checks, outputs, messages and table.

@@ -81,6 +81,37 @@ def test_console_script_runs_as_a_module(tmp_path):
     assert "Traceback" not in proc.stderr
 
 
+def _modules_loaded_by(code: str, cwd: Path) -> set[str]:
+    """The modules a fresh interpreter has imported after running ``code``."""
+    script = f"import sys\n{code}\nprint(' '.join(sorted(sys.modules)))"
+    proc = subprocess.run(
+        [sys.executable, "-c", script], capture_output=True, text=True, cwd=cwd, check=True
+    )
+    return set(proc.stdout.split())
+
+
+# What each command must not pay for at start-up: drawing, plotting, the comparison, rich.
+HEAVY = {"PIL", "ikgame.compare", "ikgame.render.plot", "ikgame.render.export", "rich"}
+
+
+def test_version_loads_neither_the_simulation_nor_drawing(tmp_path):
+    loaded = _modules_loaded_by(
+        "from ikgame.cli import main\ntry:\n    main(['--version'])\nexcept SystemExit:\n    pass",
+        tmp_path,
+    )
+    assert "ikgame.cli" in loaded
+    assert not loaded & (HEAVY | {"numpy", "pydantic", "pymunk", "ikgame.sim"})
+
+
+def test_run_without_frames_loads_no_drawing(tmp_path):
+    out = tmp_path / "run"
+    code = f"from ikgame.cli import main\nassert main(['run', '--no-frames', '--quiet', '--out', {str(out)!r}]) == 0"
+    loaded = _modules_loaded_by(code, tmp_path)
+    assert (out / "results.json").exists()
+    assert "ikgame.sim" in loaded
+    assert not loaded & (HEAVY - {"rich"})
+
+
 def test_run_writes_frames_gif_and_motion_that_show_the_chain_moving(tmp_path):
     from PIL import Image, ImageChops
 
@@ -110,6 +141,18 @@ def test_two_runs_give_byte_identical_frames(tmp_path):
     b = sorted((tmp_path / "b/frames").iterdir())
     assert [p.name for p in a] == [p.name for p in b]
     assert all(x.read_bytes() == y.read_bytes() for x, y in zip(a, b, strict=True))
+
+
+def test_png_compression_reaches_the_frames_and_is_checked(tmp_path, capsys):
+    out = tmp_path / "run"
+    args = ["run", "--quiet", "--size", "160x90", "--no-gif", "--workers", "1", "--out", str(out)]
+    assert main([*args, "--png-compression", "0"]) == 0
+    # Level 0 stores the pixels uncompressed: a filter byte per row plus 3 bytes per pixel.
+    assert (out / "frames/000000.png").stat().st_size > 90 * (1 + 160 * 3)
+    with pytest.raises(SystemExit) as exc:
+        main([*args, "--force", "--png-compression", "10"])
+    assert exc.value.code == 2
+    assert "--png-compression" in capsys.readouterr().err
 
 
 @pytest.mark.parametrize(

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import math
 import re
-from typing import Annotated, Any, Final, Literal, get_args
+from typing import Annotated, Any, Final, Literal
 
 from pydantic import (
     AfterValidator,
@@ -27,6 +27,8 @@ from pydantic import (
     model_validator,
 )
 from pydantic_core import InitErrorDetails, PydanticCustomError
+
+from ikgame.level.names import SOLVER_NAMES, SolverName
 
 __all__ = [
     "MAX_LINKS",
@@ -104,9 +106,6 @@ Friction = Annotated[float, Field(ge=0, le=10, allow_inf_nan=False)]
 Tolerance = Annotated[float, Field(gt=0, le=1000, allow_inf_nan=False)]
 Gain = Annotated[float, Field(gt=0, le=1000, allow_inf_nan=False)]
 Name = Annotated[str, Field(min_length=1, max_length=40, pattern=_NAME_PATTERN)]
-SolverName = Literal["ccd", "jacobian_transpose", "dls", "fabrik"]
-SOLVER_NAMES: Final = get_args(SolverName)
-"""The solvers a level may name (``ikgame.kinematics.SOLVERS`` has one of each, by test)."""
 
 
 def _invalid(loc: tuple[str | int, ...], message: str, value: object) -> ValidationError:

@@ -14,8 +14,8 @@ from __future__ import annotations
 
 import math
 import struct
-import zlib
-from collections.abc import Iterator, Sequence
+from collections import Counter
+from collections.abc import Sequence
 from fractions import Fraction
 from functools import lru_cache
 from typing import IO
@@ -23,6 +23,7 @@ from typing import IO
 import numpy as np
 from PIL import GifImagePlugin, Image
 
+from ikgame.render.png import PNG_SIGNATURE, png_chunk, png_chunks
 from ikgame.render.theme import Theme
 
 __all__ = ["ApngWriter", "GifWriter", "build_palette", "gif_durations", "quantizer"]
@@ -30,7 +31,6 @@ __all__ = ["ApngWriter", "GifWriter", "build_palette", "gif_durations", "quantiz
 GIF_COLORS = 255  # palette entries for pixels; the 256th is the transparent "unchanged" index
 GIF_TRANSPARENT = 255
 GIF_FREQUENT = 64  # most common exact colours kept as they are: the flat fills never dither
-_PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 
 
 # -- GIF -----------------------------------------------------------------------------------------
@@ -43,9 +43,12 @@ def build_palette(samples: Sequence[Image.Image], theme: Theme) -> bytes:
     map to themselves with no dithering; the rest of the entries adapt (median cut) to the
     remaining pixels: anti-aliased edges, the trail's fade, text.
     """
-    stacked = Image.fromarray(np.vstack([np.asarray(im.convert("RGB")) for im in samples]))
-    counts = stacked.getcolors(stacked.width * stacked.height) or []
-    counts.sort(key=lambda item: (-item[0], item[1]))
+    # Counted sample by sample and added up, rather than stacked into one tall image first.
+    totals: Counter[tuple[int, int, int]] = Counter()
+    for image in samples:
+        rgb = image.convert("RGB")
+        totals.update({c: n for n, c in rgb.getcolors(rgb.width * rgb.height) or []})
+    counts = sorted(((n, rgb) for rgb, n in totals.items()), key=lambda item: (-item[0], item[1]))
     fixed = list(dict.fromkeys(theme.colors() + [rgb for _, rgb in counts[:GIF_FREQUENT]]))
     fixed = fixed[:GIF_COLORS]
     taken = set(fixed)
@@ -75,29 +78,32 @@ class _Quantizer:
     a table filled as colours first appear (frames reuse almost all of them).
     """
 
-    _UNKNOWN = 0xFFFF
-
     def __init__(self, palette: bytes) -> None:
         self.colors = np.frombuffer(palette, dtype=np.uint8).reshape(-1, 3).astype(np.int32)
-        self.table = np.full(1 << 24, self._UNKNOWN, dtype=np.uint16)  # 32 MB
+        # Index + 1 per colour, 0 for colours not looked up yet: a zeroed table is memory the
+        # system hands out untouched, so only the pages of colours that occur take up room
+        # (a few MB, where a table filled with a marker would be 16 MB in every process).
+        self.table = np.zeros(1 << 24, dtype=np.uint8)
 
     def indices(self, image: Image.Image) -> bytes:
         # RGBX is Pillow's own layout: one little-endian uint32 per pixel, R in the low byte,
         # X masked off.
-        rgbx = image.convert("RGB").tobytes("raw", "RGBX")
+        rgb = image if image.mode == "RGB" else image.convert("RGB")  # no copy of a frame
+        rgbx = rgb.tobytes("raw", "RGBX")
         packed = np.frombuffer(rgbx, dtype="<u4") & 0xFFFFFF
         found = self.table[packed]
-        missing = found == self._UNKNOWN
+        missing = found == 0
         if missing.any():
             new = np.unique(packed[missing])
-            self.table[new] = self._nearest(new)
+            self.table[new] = self._nearest(new) + 1
             found = self.table[packed]
-        return found.astype(np.uint8).tobytes()
+        found -= 1
+        return found.tobytes()
 
     def _nearest(self, packed: np.ndarray) -> np.ndarray:
         # Weighted RGB distance (2, 4, 3): a cheap stand-in for perceived difference.
         weights = np.array([2, 4, 3], dtype=np.int64)
-        out = np.empty(len(packed), dtype=np.uint16)
+        out = np.empty(len(packed), dtype=np.uint8)
         for start in range(0, len(packed), 4096):
             block = packed[start : start + 4096].astype(np.int64)
             rgb = np.stack([block & 255, block >> 8 & 255, block >> 16], axis=1)
@@ -109,8 +115,8 @@ class _Quantizer:
 @lru_cache(maxsize=1)
 def quantizer(palette: bytes) -> _Quantizer:
     """The quantizer for ``palette``: one per palette and process, so its table fills once per
-    export (in each worker too). The table is 32 MB: call ``quantizer.cache_clear()`` when the
-    export is done."""
+    export (in each worker too). Its table takes a few MB: call ``quantizer.cache_clear()`` when
+    the export is done."""
     return _Quantizer(palette)
 
 
@@ -177,22 +183,6 @@ class GifWriter:
 # -- APNG ----------------------------------------------------------------------------------------
 
 
-def _png_chunks(data: bytes) -> Iterator[tuple[bytes, bytes]]:
-    """The (type, body) of each chunk of a PNG stream, in order."""
-    if not data.startswith(_PNG_SIGNATURE):
-        raise ValueError("not a PNG stream")
-    pos = len(_PNG_SIGNATURE)
-    while pos < len(data):
-        (length,) = struct.unpack(">I", data[pos : pos + 4])
-        kind = data[pos + 4 : pos + 8]
-        yield kind, data[pos + 8 : pos + 8 + length]
-        pos += 12 + length
-
-
-def _chunk(kind: bytes, body: bytes) -> bytes:
-    return struct.pack(">I", len(body)) + kind + body + struct.pack(">I", zlib.crc32(kind + body))
-
-
 class ApngWriter:
     """Streams an APNG from already-encoded PNG frames: each frame's image data is reused as is
     (IDAT for the first frame, fdAT for the others), so nothing is encoded twice."""
@@ -207,7 +197,7 @@ class ApngWriter:
         self.delay = delay
         self.sequence = 0
         self.written = 0
-        fp.write(_PNG_SIGNATURE)
+        fp.write(PNG_SIGNATURE)
 
     def add(self, png: bytes) -> None:
         """Append a frame given as a complete PNG file of ``size``."""
@@ -228,27 +218,27 @@ class ApngWriter:
         self.sequence += 1
         first = self.written == 0
         control_written = False
-        for kind, body in _png_chunks(png):
+        for kind, body in png_chunks(png):
             if kind == b"IEND":
                 break
             if kind == b"IDAT":
                 if not control_written:
-                    self.fp.write(_chunk(b"fcTL", control))
+                    self.fp.write(png_chunk(b"fcTL", control))
                     control_written = True
                 if first:
-                    self.fp.write(_chunk(b"IDAT", body))
+                    self.fp.write(png_chunk(b"IDAT", body))
                 else:
-                    self.fp.write(_chunk(b"fdAT", struct.pack(">I", self.sequence) + body))
+                    self.fp.write(png_chunk(b"fdAT", struct.pack(">I", self.sequence) + body))
                     self.sequence += 1
             elif first:
-                self.fp.write(_chunk(kind, body))
+                self.fp.write(png_chunk(kind, body))
                 if kind == b"IHDR":
                     # acTL: frame count, plays 0 = loop forever; it must precede any IDAT.
-                    self.fp.write(_chunk(b"acTL", struct.pack(">II", self.frames, 0)))
+                    self.fp.write(png_chunk(b"acTL", struct.pack(">II", self.frames, 0)))
         self.written += 1
 
     def close(self) -> None:
         """Write the trailer, after checking that every announced frame was added."""
         if self.written != self.frames:
             raise ValueError(f"APNG announced {self.frames} frames but got {self.written}")
-        self.fp.write(_chunk(b"IEND", b""))
+        self.fp.write(png_chunk(b"IEND", b""))

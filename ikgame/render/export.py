@@ -13,8 +13,6 @@ decides what goes into them.
 
 from __future__ import annotations
 
-import io
-import json
 import math
 import multiprocessing
 import os
@@ -25,9 +23,8 @@ from collections import deque
 from collections.abc import Iterator, Sequence
 from concurrent.futures import Future, ProcessPoolExecutor
 from contextlib import ExitStack, contextmanager
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 from PIL import Image, ImageDraw, ImageFont
@@ -36,16 +33,16 @@ from ikgame._files import atomic_open, write_atomic
 from ikgame._progress import progress_bar
 from ikgame.render.animation import ApngWriter, GifWriter, build_palette, gif_durations, quantizer
 from ikgame.render.camera import Camera
+from ikgame.render.motion import check_run, motion_json, write_motion
+from ikgame.render.output import check_export_size, check_out_dir, parse_size
 from ikgame.render.pillow import render_snapshot
+from ikgame.render.png import check_compress_level, png_bytes
 from ikgame.render.theme import Theme, load_theme
 from ikgame.render.video import Mp4Writer, check_video, even_size
 from ikgame.snapshot import Scene, Snapshot
 
 __all__ = ["check_out_dir", "export_run", "motion_json", "parse_size", "trail_at", "write_motion"]
 
-MIN_SIDE = 16  # px: below this the HUD and markers cannot fit
-MAX_SIDE = 3840  # px, either side
-MAX_PIXELS = 3840 * 2160  # a 4K frame; more is a typo or a hostile level, not a devlog GIF
 TRAIL_SECONDS = 1.5  # s of end-effector path drawn behind it
 GIF_MAX_FPS = 50.0  # browsers play GIF delays under 2 cs as 10 cs, so faster runs drop frames
 SHEET_THUMBS = 12
@@ -54,136 +51,11 @@ SHEET_THUMB_WIDTH = 320  # px, at most
 CHUNK = 8  # frames per worker task: large enough to amortise the round trip, small to balance
 PARALLEL_MIN_FRAMES = 48  # shorter runs finish before worker processes would have started
 MAX_AUTO_WORKERS = 8
+PNG_COMPRESSION = 1  # zlib level of PNG files: fast; 9 makes them about a third smaller
 _FRAME_NAME = re.compile(r"\d{6}\.png")
-_SIZE = re.compile(r"(-?\d+)\s*[xX]\s*(-?\d+)")
 
 
 # -- input checks --------------------------------------------------------------------------------
-
-
-def parse_size(text: str) -> tuple[int, int]:
-    """Parse ``"WIDTHxHEIGHT"`` into ``(width, height)``, within the export size limits.
-
-    >>> parse_size("960x540")
-    (960, 540)
-    """
-    match = _SIZE.fullmatch(text.strip()) if isinstance(text, str) else None
-    if match is None:
-        raise ValueError(f"size must be WIDTHxHEIGHT in pixels, like 960x540; got {text!r}")
-    return _check_export_size((int(match[1]), int(match[2])))
-
-
-def _check_export_size(size: object) -> tuple[int, int]:
-    try:
-        width, height = size  # type: ignore[misc]
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"size must be a pair (width, height), got {size!r}") from exc
-    if any(isinstance(v, bool) or not isinstance(v, int | np.integer) for v in (width, height)):
-        raise ValueError(f"size must be whole pixels (width, height), got {size!r}")
-    if not (
-        MIN_SIDE <= width <= MAX_SIDE
-        and MIN_SIDE <= height <= MAX_SIDE
-        and width * height <= MAX_PIXELS
-    ):
-        raise ValueError(
-            f"size {width}x{height} is out of range: each side must be {MIN_SIDE}..{MAX_SIDE} px "
-            f"and the frame at most {MAX_PIXELS} pixels (3840x2160)"
-        )
-    return int(width), int(height)
-
-
-def check_out_dir(path: str | os.PathLike[str], force: bool) -> Path:
-    """Return ``path`` as a Path if an export may write there, or raise ``ValueError``.
-
-    A missing or empty folder is fine; a folder with files in it only with ``force``.
-
-    >>> check_out_dir("runs/not-there-yet", force=False).name
-    'not-there-yet'
-    """
-    out = Path(path)
-    if out.exists() and not out.is_dir():
-        raise ValueError(f"output path {out} exists and is not a folder")
-    if out.is_dir() and not force and any(out.iterdir()):
-        raise ValueError(f"output folder {out} is not empty; use --force to overwrite its files")
-    return out
-
-
-def _check_run(scene: Scene, snapshots: Sequence[Snapshot]) -> None:
-    if not snapshots:
-        raise ValueError("no snapshots to export")
-    if not (math.isfinite(scene.fps) and scene.fps > 0):
-        raise ValueError(f"scene.fps must be a positive number, got {scene.fps!r}")
-
-
-# -- baked motion --------------------------------------------------------------------------------
-
-
-def motion_json(scene: Scene, snapshots: Sequence[Snapshot]) -> dict[str, Any]:
-    """The run as keyframes a game engine can import: one entry per recorded frame.
-
-    Each frame has every joint's local angle (radians and degrees), every link's world angle,
-    the world positions of the joints (base first, end effector last), the target and the
-    solver's status. Positions are world px with y up; NaN errors become null.
-
-    >>> scene = Scene("demo", np.zeros((0, 5)), np.zeros((0, 3)), np.full(1, 8.0), 100.0)
-    >>> snap = Snapshot(0.0, 0, np.array([[0.0, 0.0], [0.0, 100.0]]), np.array([1.5708]),
-    ...                 np.array([1.5708]))
-    >>> motion = motion_json(scene, [snap])
-    >>> motion["link_lengths"], motion["frames"][0]["angles_deg"]
-    ([100.0], [90.0002])
-    """
-    _check_run(scene, snapshots)
-    first = np.asarray(snapshots[0].joints, dtype=float)
-    lengths = np.linalg.norm(np.diff(first, axis=0), axis=1)
-    return {
-        "format": "ikgame-motion",
-        "version": 1,
-        "level": scene.level_name,
-        "fps": float(scene.fps),
-        "frame_count": len(snapshots),
-        "duration": _round(len(snapshots) / scene.fps, 6),
-        "units": {"length": "px", "angle": "rad, and deg in *_deg", "time": "s", "y_axis": "up"},
-        "conventions": {
-            "angles": "local joint angle of each link relative to its parent link, counter-clockwise",
-            "world_angles": "each link's direction relative to +x, counter-clockwise",
-            "joints": "world positions: the base, each following joint, then the end effector",
-        },
-        "link_count": len(lengths),
-        "link_lengths": [_round(v, 3) for v in lengths],
-        "link_widths": [_round(v, 3) for v in np.asarray(scene.link_widths, dtype=float)],
-        "frames": [_motion_frame(snap) for snap in snapshots],
-    }
-
-
-def _motion_frame(snap: Snapshot) -> dict[str, Any]:
-    angles = np.asarray(snap.angles, dtype=float)
-    error = float(snap.error)
-    return {
-        "time": _round(snap.time, 6),
-        "tick": int(snap.tick),
-        "step_index": int(snap.step_index),
-        "angles_rad": [_round(a, 6) for a in angles],
-        "angles_deg": [_round(a, 4) for a in np.degrees(angles)],
-        "world_angles_rad": [_round(a, 6) for a in np.asarray(snap.world_angles, dtype=float)],
-        "joints": [[_round(x, 3), _round(y, 3)] for x, y in np.asarray(snap.joints, dtype=float)],
-        "target": None if snap.target is None else [_round(v, 3) for v in snap.target],
-        "error": _round(error, 3) if math.isfinite(error) else None,
-        "solver_status": str(snap.solver_status),
-        "torque_limited": [bool(v) for v in np.asarray(snap.torque_limited, dtype=bool)],
-    }
-
-
-def _round(value: float, digits: int) -> float:
-    # +0.0 turns -0.0 into 0.0, which would otherwise print as "-0.0" in the keyframes.
-    return round(float(value), digits) + 0.0
-
-
-def _motion_bytes(motion: dict[str, Any]) -> bytes:
-    """The motion as JSON: an indented header, then one line per frame so runs diff well."""
-    header = {key: value for key, value in motion.items() if key != "frames"}
-    head = json.dumps(header, indent=2, allow_nan=False)
-    frames = ",\n    ".join(json.dumps(f, allow_nan=False) for f in motion["frames"])
-    return f'{head[:-2]},\n  "frames": [\n    {frames}\n  ]\n}}\n'.encode()
 
 
 # -- one frame -----------------------------------------------------------------------------------
@@ -199,13 +71,20 @@ def trail_at(snapshots: Sequence[Snapshot], index: int, fps: float) -> np.ndarra
     >>> trail_at(snaps, 2, 30.0).tolist()
     [[0.0, 1.0], [1.0, 1.0], [2.0, 1.0]]
     """
-    start = max(0, index - max(1, round(TRAIL_SECONDS * fps)))
+    start = max(0, index - _trail_frames(fps))
     return np.array([snap.joints[-1] for snap in snapshots[start : index + 1]], dtype=float)
+
+
+def _trail_frames(fps: float) -> int:
+    """How many frames back a frame's trail reaches."""
+    return max(1, round(TRAIL_SECONDS * fps))
 
 
 @dataclass(frozen=True)
 class _Job:
-    """Everything needed to draw any frame of a run; sent once to each worker process."""
+    """Everything needed to draw the frames of a run, or of a window of it: ``snapshots`` are
+    the frames from index ``first`` on. Worker processes get the job once without snapshots,
+    then each task the window it draws (see :meth:`window`), so a worker never holds the run."""
 
     scene: Scene
     snapshots: tuple[Snapshot, ...]
@@ -214,12 +93,21 @@ class _Job:
     png: bool  # encode PNG bytes (frames or APNG)
     gif_stride: int  # every gif_stride-th frame goes into the GIF; 0 without a GIF
     mp4: bool = False  # raw RGB of the even-sided frame, for the MP4 encoder
+    png_compression: int = PNG_COMPRESSION  # zlib level: 1 fast .. 9 small
+    first: int = 0  # frame index of snapshots[0]
+
+    def window(self, start: int, stop: int) -> _Job:
+        """The job for frames ``start`` to ``stop`` only: their snapshots and their trails'."""
+        first = max(0, start - _trail_frames(self.scene.fps))
+        window = self.snapshots[first - self.first : stop - self.first]
+        return replace(self, snapshots=window, first=first)
 
     def render(self, index: int, hud: bool = True) -> Image.Image:
-        trail = trail_at(self.snapshots, index, self.scene.fps)
+        local = index - self.first
+        trail = trail_at(self.snapshots, local, self.scene.fps)
         return render_snapshot(
             self.scene,
-            self.snapshots[index],
+            self.snapshots[local],
             self.camera,
             self.theme,
             trail=trail,
@@ -230,7 +118,7 @@ class _Job:
         """Frame ``index`` as PNG bytes, as GIF palette indices and as the MP4's RGB bytes
         (None where not wanted)."""
         image = self.render(index)
-        png = _png_bytes(image) if self.png else None
+        png = png_bytes(image, self.png_compression) if self.png else None
         indices = None
         if palette is not None and index % self.gif_stride == 0:
             indices = quantizer(palette).indices(image)
@@ -238,12 +126,6 @@ class _Job:
         if self.mp4:
             rgb = image.crop((0, 0, *even_size(image.size))).tobytes()
         return png, indices, rgb
-
-
-def _png_bytes(image: Image.Image) -> bytes:
-    buffer = io.BytesIO()
-    image.save(buffer, format="PNG")
-    return buffer.getvalue()
 
 
 # -- worker processes ------------------------------------------------------------------------------
@@ -257,10 +139,11 @@ def _init_worker(job: _Job) -> None:
 
 
 def _worker_payloads(
-    start: int, stop: int, palette: bytes | None
+    snapshots: tuple[Snapshot, ...], first: int, start: int, stop: int, palette: bytes | None
 ) -> list[tuple[bytes | None, ...]]:
     assert _WORKER_JOB is not None, "worker used without _init_worker"
-    payloads = [_WORKER_JOB.payload(i, palette) for i in range(start, stop)]
+    job = replace(_WORKER_JOB, snapshots=snapshots, first=first)
+    payloads = [job.payload(i, palette) for i in range(start, stop)]
     # Palette indices are a byte per pixel but mostly runs: compressed they are ~5% of the
     # size, both in the pipe to the main process and in results queued for their turn.
     return [
@@ -268,9 +151,10 @@ def _worker_payloads(
     ]
 
 
-def _worker_rgb(index: int) -> bytes:
+def _worker_rgb(snapshots: tuple[Snapshot, ...], first: int, index: int) -> bytes:
     assert _WORKER_JOB is not None, "worker used without _init_worker"
-    return _WORKER_JOB.render(index).tobytes()
+    job = replace(_WORKER_JOB, snapshots=snapshots, first=first)
+    return job.render(index).tobytes()
 
 
 def _main_importable() -> bool:
@@ -287,7 +171,8 @@ def _worker_count(workers: int | None, frames: int) -> int:
     if workers is None:
         if frames < PARALLEL_MIN_FRAMES or not _main_importable():
             return 1
-        return max(1, min(os.cpu_count() or 1, MAX_AUTO_WORKERS))
+        # This process is a stage of the pipeline too (GIF, file writes): one core stays its own.
+        return max(1, min((os.cpu_count() or 1) - 1, MAX_AUTO_WORKERS))
     if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
         raise ValueError(f"workers must be a positive int or None, got {workers!r}")
     if workers > 1 and not _main_importable():
@@ -309,7 +194,7 @@ def _pool(job: _Job, workers: int) -> Iterator[ProcessPoolExecutor | None]:
         workers,
         mp_context=multiprocessing.get_context("spawn"),
         initializer=_init_worker,
-        initargs=(job,),
+        initargs=(replace(job, snapshots=()),),
     )
     try:
         yield pool
@@ -332,7 +217,11 @@ def _payloads(
     def submit() -> None:
         start = next(chunks, None)
         if start is not None:
-            pending.append(pool.submit(_worker_payloads, start, min(start + CHUNK, count), palette))
+            stop = min(start + CHUNK, count)
+            window = job.window(start, stop)
+            pending.append(
+                pool.submit(_worker_payloads, window.snapshots, window.first, start, stop, palette)
+            )
 
     # A couple of chunks queued per worker keeps them busy while bounding frames held in memory.
     for _ in range(2 * workers):
@@ -349,7 +238,11 @@ def _sample_images(
 ) -> list[Image.Image]:
     if pool is None:
         return [job.render(i) for i in indices]
-    return [Image.frombytes("RGB", job.camera.size, raw) for raw in pool.map(_worker_rgb, indices)]
+    windows = [job.window(i, i + 1) for i in indices]
+    raws = pool.map(
+        _worker_rgb, [w.snapshots for w in windows], [w.first for w in windows], indices
+    )
+    return [Image.frombytes("RGB", job.camera.size, raw) for raw in raws]
 
 
 def _sample_indices(count: int, wanted: int) -> list[int]:
@@ -413,6 +306,7 @@ def export_run(
     motion: bool = True,
     workers: int | None = None,
     progress: bool = True,
+    png_compression: int = PNG_COMPRESSION,
 ) -> list[Path]:
     """Write a run's files into ``out_dir`` (created if missing) and return their paths.
 
@@ -421,8 +315,11 @@ def export_run(
     frame, as browsers slow faster GIFs down); ``run.png`` an APNG at the exact frame rate;
     ``run.mp4`` H.264 at the run's fps (needs the ``video`` extra; see :mod:`ikgame.render.video`);
     ``sheet.png`` a contact sheet of about 12 frames; ``motion.json`` (see :func:`motion_json`).
-    ``workers`` processes draw the frames (None: one per CPU for long runs, else 1); the files
-    are the same byte for byte whatever the count. Workers are spawned, so, as always with
+    ``png_compression`` is the zlib level of the PNG files, 0..9: the default 1 is fast, 9 makes
+    files about a third smaller and the export slower.
+    ``workers`` processes draw the frames (None: for long runs one per CPU but the one this
+    process keeps busy, so none on two cores; else 1); the files are the same byte for byte
+    whatever the count. Workers are spawned, so, as always with
     multiprocessing, a calling script needs an ``if __name__ == "__main__":`` guard. Frame files left from an earlier, longer run
     are removed so ``frames/`` holds this run only. Check ``out_dir`` first with
     :func:`check_out_dir`.
@@ -435,8 +332,9 @@ def export_run(
     ['000000.png', 'run.gif', 'motion.json']
     """
     snapshots = tuple(snapshots)
-    _check_run(scene, snapshots)
-    size = _check_export_size(size)
+    check_run(scene, snapshots)
+    size = check_export_size(size)
+    check_compress_level(png_compression)
     if mp4:
         check_video()
     resolved_theme = theme if isinstance(theme, Theme) else load_theme(theme)
@@ -451,6 +349,7 @@ def export_run(
         theme=resolved_theme,
         png=frames or apng,
         gif_stride=stride,
+        png_compression=png_compression,
         mp4=mp4,
     )
     samples = _sample_indices(len(snapshots), SHEET_THUMBS)
@@ -458,25 +357,17 @@ def export_run(
     try:
         written = _write_frames(out, job, workers, samples, frames, gif, apng, mp4, show_progress)
     finally:
-        # The colour table is 32 MB: keep it no longer than the export that needed it.
+        # The colour table takes a few MB: keep it no longer than the export that needed it.
         quantizer.cache_clear()
     if sheet:
-        written.append(write_atomic(out / "sheet.png", _png_bytes(_contact_sheet(job, samples))))
+        written.append(
+            write_atomic(
+                out / "sheet.png", png_bytes(_contact_sheet(job, samples), job.png_compression)
+            )
+        )
     if motion:
         written.append(write_motion(out, scene, snapshots))
     return written
-
-
-def write_motion(
-    out_dir: str | os.PathLike[str], scene: Scene, snapshots: Sequence[Snapshot]
-) -> Path:
-    """Write ``motion.json`` (see :func:`motion_json`) into ``out_dir`` and return its path:
-    the baked motion on its own, for a run that draws no pictures."""
-    snapshots = tuple(snapshots)
-    _check_run(scene, snapshots)
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    return write_atomic(out / "motion.json", _motion_bytes(motion_json(scene, snapshots)))
 
 
 def _write_frames(

@@ -1,10 +1,14 @@
 """Draw a :class:`~ikgame.snapshot.Snapshot` with Pillow.
 
-The scene is drawn at ``supersample`` times the output size and shrunk with a Lanczos filter:
-Pillow's primitives are not anti-aliased, and averaging many sub-pixels is the cheapest way to
-get smooth edges. The static scene (background, grid, goals, obstacles) is drawn and shrunk once
-per run; each frame redraws and shrinks only the rectangle its moving parts cover, which makes
-a frame about three times cheaper. The HUD is drawn after the shrink so its text stays crisp.
+The scene is drawn at ``supersample`` times the output size and shrunk by averaging each
+``supersample`` x ``supersample`` block (``Image.reduce``): Pillow's primitives are not
+anti-aliased, and the share of a pixel's sub-pixels an edge covers is exactly the anti-aliased
+coverage. A block average is ten times cheaper than a Lanczos shrink of the same sub-pixels and
+reaches no neighbouring pixel, so a frame can be shrunk piecewise. The static scene (background,
+grid, goals, obstacles) is drawn and shrunk once per run; each frame redraws only the rectangle
+its moving parts span, and shrinks and pastes only the tiles they touch: a trail or a dashed path
+that crosses the frame touches a diagonal band of tiles, not the rectangle around it. The HUD is
+drawn after the shrink so its text stays crisp.
 Links and props that carry a sprite are drawn as their images instead of their shapes
 (:func:`_draw_sprites`, with :mod:`ikgame.render.sprites`), over the shapes, under the crosshair.
 Translucent layers (goals, trail, faded targets) are blended with the background colour by hand
@@ -16,6 +20,7 @@ Sizes below are in output pixels unless a name says otherwise.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from functools import lru_cache
 
 import numpy as np
@@ -39,8 +44,7 @@ UPCOMING_RADIUS = 5.5  # px, faded rings of targets still to come
 TRAIL_WIDTH = (1.0, 4.0)  # px, oldest and newest trail segment
 HUD_PANEL_ALPHA = 0.84  # the HUD panel over the scene
 MAX_SUPERSAMPLE = 8  # 8x of a 4K frame is already 2 GB of pixels
-# Output px a Lanczos shrink reaches on each side (its window is 3 output px), plus 1 for rounding.
-LANCZOS_REACH = 4
+DIRTY_TILE = 32  # output px: the side of the tiles a frame's moving parts mark for redrawing
 
 
 def to_draw_coords(camera: Camera, points: object) -> np.ndarray:
@@ -88,22 +92,23 @@ def render_snapshot(
 
     big = camera.scaled(supersample)
     static_big, static = _static_layers(scene, camera, theme, supersample)
-    # Measure first: only the rectangle the moving parts touch is drawn and resampled, which
-    # is most of the saving, since the Lanczos shrink costs more than all the drawing.
-    extent = _Extent()
-    _draw_dynamic(_Painter(extent, big, theme, supersample), scene, snapshot, trail)
+    # Record first: only what the moving parts touch is drawn and shrunk, which is most of the
+    # saving, since shrinking costs more than all the drawing.
+    recording = _Recording()
+    _draw_dynamic(_Painter(recording, big, theme, supersample), scene, snapshot, trail)
     image = static.copy()
-    boxes = None if extent.box is None else _dirty_boxes(extent.box, camera.size, supersample)
-    if boxes is not None:
-        paste, crop = boxes
-        region = static_big.crop(tuple(v * supersample for v in crop))
-        offset = (crop[0] * supersample, crop[1] * supersample)
-        painter = _Painter(ImageDraw.Draw(region), big, theme, supersample, offset, region)
-        _draw_dynamic(painter, scene, snapshot, trail)
-        if supersample > 1:
-            region = region.resize((crop[2] - crop[0], crop[3] - crop[1]), Image.Resampling.LANCZOS)
-        inner = (paste[0] - crop[0], paste[1] - crop[1], paste[2] - crop[0], paste[3] - crop[1])
-        image.paste(region.crop(inner), paste[:2])
+    rects = _dirty_rects(recording.boxes, camera.size, supersample)
+    if rects:
+        ss = supersample
+        left, top = min(r[0] for r in rects), min(r[1] for r in rects)
+        right, bottom = max(r[2] for r in rects), max(r[3] for r in rects)
+        region = static_big.crop((left * ss, top * ss, right * ss, bottom * ss))
+        recording.replay(region, (left * ss, top * ss))
+        for x0, y0, x1, y1 in rects:
+            tile = region.crop(
+                ((x0 - left) * ss, (y0 - top) * ss, (x1 - left) * ss, (y1 - top) * ss)
+            )
+            image.paste(tile.reduce(ss) if ss > 1 else tile, (x0, y0))
     if hud:
         _draw_hud(image, scene, snapshot, theme)
     return image
@@ -137,62 +142,112 @@ def _static_layers(
     painter.obstacles(scene)
     if supersample == 1:
         return image, image
-    return image, image.resize(camera.size, Image.Resampling.LANCZOS)
+    return image, image.reduce(supersample)
 
 
-def _dirty_boxes(
-    box: tuple[float, float, float, float], size: tuple[int, int], supersample: int
-) -> tuple[tuple[int, int, int, int], tuple[int, int, int, int]] | None:
-    """Output-pixel boxes for a frame whose moving parts cover drawing-pixel ``box``: the one to
-    paste (every pixel the moving parts can change) and the larger one to redraw and shrink, with
-    room for the filter's reach, so no pasted pixel misses a neighbour a full-frame shrink uses.
-    None when the moving parts are all out of the picture."""
-    reach = LANCZOS_REACH if supersample > 1 else 0
+def _dirty_rects(
+    boxes: list[tuple[float, float, float, float]], size: tuple[int, int], supersample: int
+) -> list[tuple[int, int, int, int]]:
+    """Output-pixel rectangles covering every ``DIRTY_TILE`` tile that one of the drawing-pixel
+    ``boxes`` touches, inside a frame of ``size``: each row's runs of touched tiles, merged with
+    the same runs of the rows below. Empty when the moving parts are all out of the picture.
+
+    >>> _dirty_rects([(0.0, 0.0, 30.0, 30.0), (100.0, 150.0, 110.0, 160.0)], (64, 64), 3)
+    [(0, 0, 32, 32), (32, 32, 64, 64)]
+    """
     width, height = size
-
-    def grow(b: tuple[int, int, int, int], by: int) -> tuple[int, int, int, int]:
-        return (max(0, b[0] - by), max(0, b[1] - by), min(width, b[2] + by), min(height, b[3] + by))
-
-    x0, y0, x1, y1 = box
-    touched = (
-        math.floor(x0 / supersample),
-        math.floor(y0 / supersample),
-        math.ceil(x1 / supersample),
-        math.ceil(y1 / supersample),
+    tile = DIRTY_TILE * supersample  # in drawing px
+    columns, rows = math.ceil(width / DIRTY_TILE), math.ceil(height / DIRTY_TILE)
+    touched = np.zeros((rows, columns), dtype=bool)
+    if boxes:
+        spans = np.asarray(boxes, dtype=float) / tile
+        # Clipped to the frame at both ends: a box outside it gives an empty slice (a negative
+        # bound would count from the far end instead).
+        limit = [columns, rows]
+        low = np.clip(np.floor(spans[:, :2]), 0, limit).astype(int)
+        high = np.clip(np.ceil(spans[:, 2:]), 0, limit).astype(int)
+        for c0, r0, c1, r1 in np.hstack([low, high]).tolist():
+            touched[r0:r1, c0:c1] = True
+    rects: list[tuple[int, int, int, int]] = []
+    open_runs: dict[tuple[int, int], int] = {}  # a run of columns -> the row its rectangle began
+    for row in range(rows + 1):
+        runs = set() if row == rows else set(_runs(touched[row]))
+        for run in [r for r in open_runs if r not in runs]:
+            rects.append((run[0], open_runs.pop(run), run[1], row))
+        for run in runs:
+            open_runs.setdefault(run, row)
+    return sorted(
+        (
+            c0 * DIRTY_TILE,
+            r0 * DIRTY_TILE,
+            min(width, c1 * DIRTY_TILE),
+            min(height, r1 * DIRTY_TILE),
+        )
+        for c0, r0, c1, r1 in rects
     )
-    paste = grow(touched, reach)
-    if paste[0] >= paste[2] or paste[1] >= paste[3]:
-        return None
-    return paste, grow(paste, reach)
 
 
-class _Extent:
-    """Stands in for ``ImageDraw`` on a measuring pass: records the box the primitives touch."""
+def _runs(flags: np.ndarray) -> list[tuple[int, int]]:
+    """The ``(start, stop)`` of each run of True in a 1-d boolean array."""
+    edges = np.flatnonzero(np.diff(np.concatenate(([False], flags, [False])).astype(np.int8)))
+    return list(zip(edges[::2].tolist(), edges[1::2].tolist(), strict=True))
+
+
+class _Recording:
+    """Stands in for ``ImageDraw`` on the first pass: keeps each primitive and the box it
+    touches, so that the frame is then drawn by replaying them onto the region that changes,
+    without running the painter a second time."""
 
     def __init__(self) -> None:
-        self.box: tuple[float, float, float, float] | None = None
+        self.boxes: list[tuple[float, float, float, float]] = []
+        self.calls: list[tuple[str, list[tuple[float, float]], dict[str, object]]] = []
 
-    def _add(self, xy: object, pad: float) -> None:
-        points = np.asarray(xy, dtype=float).reshape(-1, 2)
-        low, high = points.min(axis=0) - pad, points.max(axis=0) + pad
-        if self.box is not None:
-            low = np.minimum(low, self.box[:2])
-            high = np.maximum(high, self.box[2:])
-        self.box = (float(low[0]), float(low[1]), float(high[0]), float(high[1]))
+    def _add(self, name: str, xy: Sequence[object], pad: float, options: dict[str, object]) -> None:
+        # Plain floats, not NumPy: a frame records hundreds of small primitives.
+        if isinstance(xy[0], int | float):
+            points = list(zip(xy[0::2], xy[1::2], strict=True))
+        else:
+            points = [(p[0], p[1]) for p in xy]  # type: ignore[index]
+        xs, ys = [p[0] for p in points], [p[1] for p in points]
+        self.boxes.append((min(xs) - pad, min(ys) - pad, max(xs) + pad, max(ys) + pad))  # type: ignore[type-var, operator]
+        self.calls.append((name, points, options))  # type: ignore[arg-type]
 
     # Pillow rounds coordinates and grows outlines and wide lines by up to their width: pad.
-    def line(self, xy: object, fill: object = None, width: int = 1, **_: object) -> None:
-        self._add(xy, width + 1)
+    def line(self, xy: Sequence[object], fill: object = None, width: int = 1) -> None:
+        self._add("line", xy, width + 1, {"fill": fill, "width": width})
 
     def polygon(
-        self, xy: object, fill: object = None, outline: object = None, width: int = 1
+        self, xy: Sequence[object], fill: object = None, outline: object = None, width: int = 1
     ) -> None:
-        self._add(xy, width + 1)
+        self._add("polygon", xy, width + 1, {"fill": fill, "outline": outline, "width": width})
 
     def ellipse(
-        self, xy: object, fill: object = None, outline: object = None, width: int = 1
+        self, xy: Sequence[object], fill: object = None, outline: object = None, width: int = 1
     ) -> None:
-        self._add(xy, 1)
+        self._add("ellipse", xy, 1, {"fill": fill, "outline": outline, "width": width})
+
+    def sprite(
+        self, sprite: Sprite, anchor: tuple[float, float], angle: float, scale: float
+    ) -> None:
+        """A sprite placed as :func:`~ikgame.render.sprites.draw_sprite` places it."""
+        corners = sprite_corners(sprite, anchor, angle, scale).tolist()
+        self._add(
+            "sprite", [anchor, *corners], 2, {"sprite": sprite, "angle": angle, "scale": scale}
+        )
+
+    def replay(self, image: Image.Image, offset: tuple[int, int]) -> None:
+        """Draw the recorded primitives on ``image``, whose top-left corner is drawing pixel
+        ``offset`` of the frame."""
+        ox, oy = offset
+        draw = ImageDraw.Draw(image)
+        for name, points, options in self.calls:
+            shifted = [(x - ox, y - oy) for x, y in points]
+            if name == "sprite":
+                draw_sprite(
+                    image, options["sprite"], shifted[0], options["angle"], options["scale"]
+                )  # type: ignore[arg-type]
+            else:
+                getattr(draw, name)(shifted, **options)
 
 
 def _blend(base: RGB, color: RGB, alpha: float) -> RGB:
@@ -205,25 +260,19 @@ class _Painter:
 
     def __init__(
         self,
-        draw: ImageDraw.ImageDraw | _Extent,
+        draw: ImageDraw.ImageDraw | _Recording,
         camera: Camera,
         theme: Theme,
         ss: int,
-        offset: tuple[int, int] = (0, 0),
-        image: Image.Image | None = None,
     ) -> None:
         self.draw = draw
-        # The image ``draw`` draws on, for pasting sprites; None on the measuring pass.
-        self.image = image
         self.camera = camera
         self.theme = theme
         self.ss = ss  # drawing pixels per output pixel
-        # Drawing px of the image's top-left corner when drawing on a crop of the frame.
-        self.offset = np.array(offset, dtype=float)
 
     def px(self, points: object) -> np.ndarray:
         points = np.asarray(points, dtype=float).reshape(-1, 2)
-        return to_draw_coords(self.camera, points) - self.offset
+        return to_draw_coords(self.camera, points)
 
     def circle(
         self,
@@ -383,11 +432,8 @@ class _Painter:
     def sprite(self, sprite: Sprite, point: np.ndarray, angle: float) -> None:
         """``sprite`` with its pivot on world ``point``, turned by ``angle`` (world radians)."""
         # Sprites are placed in pixel-corner coordinates, half a pixel off Pillow's primitives.
-        anchor = tuple(self.px(point)[0] + 0.5)
-        if self.image is None:  # the measuring pass: only the box it covers counts
-            self.draw.polygon(sprite_corners(sprite, anchor, angle, self.camera.scale))
-        else:
-            draw_sprite(self.image, sprite, anchor, angle, self.camera.scale)
+        x, y = self.px(point)[0] + 0.5
+        self.draw.sprite(sprite, (float(x), float(y)), angle, self.camera.scale)
 
     def mount(self, base: np.ndarray, link_radius: float) -> None:
         """A pedestal under the base with a hatched ground line, like an engineering drawing."""
@@ -551,10 +597,13 @@ def _draw_hud(image: Image.Image, scene: Scene, snapshot: Snapshot, theme: Theme
         text = "".join(run for run, _ in line)
         widths.append(draw.textbbox((0, 0), text, font=_font(size), anchor="la")[2])
         heights.append(round(size * 1.3))
-    box = (pad, pad, pad + max(widths) + 2 * pad, pad + sum(heights) + pad)
-    mask = Image.new("L", image.size, 0)
-    ImageDraw.Draw(mask).rounded_rectangle(box, radius=pad, fill=round(255 * HUD_PANEL_ALPHA))
-    image.paste(theme.hud_panel, (0, 0), mask)
+    right, bottom = pad + max(widths) + 2 * pad, pad + sum(heights) + pad
+    # A mask of the panel's size, not the frame's: the paste then touches only the panel.
+    mask = Image.new("L", (right + 1, bottom + 1), 0)
+    ImageDraw.Draw(mask).rounded_rectangle(
+        (pad, pad, right, bottom), radius=pad, fill=round(255 * HUD_PANEL_ALPHA)
+    )
+    image.paste(theme.hud_panel, (0, 0, right + 1, bottom + 1), mask)
     y = pad + pad // 2
     for line, size, line_height in zip(lines, sizes, heights, strict=True):
         x, font = 2 * pad, _font(size)

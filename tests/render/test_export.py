@@ -13,9 +13,11 @@ import pytest
 from PIL import Image
 
 from ikgame.render import export
-from ikgame.render.export import check_out_dir, export_run, motion_json, parse_size
+from ikgame.render.export import export_run, motion_json
+from ikgame.render.theme import load_theme
 
 SIZE = (160, 90)
+LIGHT = load_theme("light")
 
 
 def _export(out, scene, snaps, **kwargs):
@@ -91,6 +93,29 @@ def test_motion_json_holds_every_frame(tmp_path, run):
     assert frame["torque_limited"] == snap.torque_limited.tolist()
 
 
+def test_motion_json_is_an_indented_header_then_one_line_per_frame(tmp_path, run):
+    scene, snaps = run(3)
+    _export(tmp_path, scene, snaps, frames=False, gif=False)
+    text = (tmp_path / "motion.json").read_text()
+    motion = motion_json(scene, snaps)
+    frames = motion.pop("frames")
+    head = json.dumps(motion, indent=2)
+    lines = [json.dumps(frame) for frame in frames]
+    assert text == f'{head[:-2]},\n  "frames": [\n    ' + ",\n    ".join(lines) + "\n  ]\n}\n"
+
+
+def test_png_compression_trades_time_for_size_not_pixels(tmp_path, run):
+    scene, snaps = run(2)
+    _export(tmp_path / "fast", scene, snaps, gif=False, motion=False)
+    _export(tmp_path / "small", scene, snaps, gif=False, motion=False, png_compression=9)
+    fast, small = tmp_path / "fast/frames/000001.png", tmp_path / "small/frames/000001.png"
+    assert small.stat().st_size < fast.stat().st_size
+    with Image.open(fast) as a, Image.open(small) as b:
+        assert a.tobytes() == b.tobytes()
+    with pytest.raises(ValueError, match="compress_level"):
+        _export(tmp_path / "bad", scene, snaps, png_compression=10)
+
+
 def test_motion_json_writes_missing_values_as_null(run):
     scene, snaps = run(2, targets=np.zeros((0, 2)))
     frame = motion_json(scene, snaps)["frames"][0]
@@ -124,44 +149,6 @@ def test_re_export_removes_frames_of_a_longer_earlier_run(tmp_path, run):
     _export(tmp_path, scene, snaps[:2], gif=False, motion=False)
     names = sorted(p.name for p in (tmp_path / "frames").iterdir())
     assert names == ["000000.png", "000001.png", "notes.txt"]
-
-
-def test_check_out_dir_refuses_a_non_empty_folder_unless_forced(tmp_path):
-    assert check_out_dir(tmp_path / "new", force=False) == tmp_path / "new"
-    assert check_out_dir(tmp_path, force=False) == tmp_path
-    (tmp_path / "old.png").write_bytes(b"")
-    with pytest.raises(ValueError, match="is not empty"):
-        check_out_dir(tmp_path, force=False)
-    assert check_out_dir(tmp_path, force=True) == tmp_path
-    with pytest.raises(ValueError, match="not a folder"):
-        check_out_dir(tmp_path / "old.png", force=True)
-
-
-def test_parse_size_accepts_sizes_in_range():
-    assert parse_size("960x540") == (960, 540)
-    assert parse_size(" 1080X1920 ") == (1080, 1920)
-    assert parse_size("3840x2160") == (3840, 2160)
-    assert parse_size("16x16") == (16, 16)
-
-
-@pytest.mark.parametrize(
-    "text, message",
-    [
-        ("0x0", "out of range"),
-        ("-5x3", "out of range"),
-        ("15x100", "out of range"),
-        ("3841x100", "out of range"),
-        ("3840x3840", "out of range"),
-        ("abc", "WIDTHxHEIGHT"),
-        ("960x", "WIDTHxHEIGHT"),
-        ("960x540x3", "WIDTHxHEIGHT"),
-        ("9.5x4", "WIDTHxHEIGHT"),
-        ("", "WIDTHxHEIGHT"),
-    ],
-)
-def test_parse_size_rejects_bad_sizes(text, message):
-    with pytest.raises(ValueError, match=message):
-        parse_size(text)
 
 
 def test_bad_export_arguments_raise(tmp_path, run):
@@ -208,3 +195,23 @@ def test_code_from_stdin_exports_serially_or_says_why(tmp_path, run, monkeypatch
     assert export._worker_count(None, len(snaps)) == 1
     with pytest.raises(ValueError, match="workers=1"):
         _export(tmp_path, scene, snaps, workers=2)
+
+
+def test_a_window_of_a_run_draws_its_frames_as_the_whole_run_does(run):
+    scene, snaps = run(120)
+    job = export._Job(scene, tuple(snaps), export.Camera.fit(scene, snaps, SIZE), LIGHT, True, 1)
+    window = job.window(100, 108)
+    # Only the frames and the trail they need travel to a worker, not the run.
+    assert window.first == 100 - round(export.TRAIL_SECONDS * scene.fps)
+    assert len(window.snapshots) == 108 - window.first
+    for index in (100, 107):
+        assert window.render(index).tobytes() == job.render(index).tobytes()
+    assert job.window(0, 8).first == 0
+
+
+def test_automatic_workers_leave_this_process_a_core(run, monkeypatch):
+    monkeypatch.setattr(export, "_main_importable", lambda: True)
+    for cores, expected in [(1, 1), (2, 1), (4, 3), (64, export.MAX_AUTO_WORKERS)]:
+        monkeypatch.setattr(export.os, "cpu_count", lambda cores=cores: cores)
+        assert export._worker_count(None, export.PARALLEL_MIN_FRAMES) == expected
+    assert export._worker_count(None, export.PARALLEL_MIN_FRAMES - 1) == 1

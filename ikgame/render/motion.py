@@ -1,0 +1,128 @@
+"""The baked motion of a run, ``motion.json``: keyframes a game engine can import.
+
+Apart from :mod:`ikgame.render.export` because a run without pictures writes it too, and should
+not load Pillow for that. The file is streamed a keyframe at a time, so a long run's keyframes
+are never all in memory as JSON.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from collections.abc import Sequence
+from pathlib import Path
+from typing import IO, Any
+
+import numpy as np
+
+from ikgame._files import atomic_open
+from ikgame.snapshot import Scene, Snapshot
+
+__all__ = ["check_run", "motion_json", "write_motion"]
+
+
+def check_run(scene: Scene, snapshots: Sequence[Snapshot]) -> None:
+    """``ValueError`` unless ``snapshots`` is a run to export: one frame at least, at a
+    positive frame rate."""
+    if not snapshots:
+        raise ValueError("no snapshots to export")
+    if not (math.isfinite(scene.fps) and scene.fps > 0):
+        raise ValueError(f"scene.fps must be a positive number, got {scene.fps!r}")
+
+
+def motion_json(scene: Scene, snapshots: Sequence[Snapshot]) -> dict[str, Any]:
+    """The run as keyframes a game engine can import: one entry per recorded frame.
+
+    Each frame has every joint's local angle (radians and degrees), every link's world angle,
+    the world positions of the joints (base first, end effector last), the target and the
+    solver's status. Positions are world px with y up; NaN errors become null.
+
+    >>> scene = Scene("demo", np.zeros((0, 5)), np.zeros((0, 3)), np.full(1, 8.0), 100.0)
+    >>> snap = Snapshot(0.0, 0, np.array([[0.0, 0.0], [0.0, 100.0]]), np.array([1.5708]),
+    ...                 np.array([1.5708]))
+    >>> motion = motion_json(scene, [snap])
+    >>> motion["link_lengths"], motion["frames"][0]["angles_deg"]
+    ([100.0], [90.0002])
+    """
+    return _motion_header(scene, snapshots) | {"frames": [_motion_frame(s) for s in snapshots]}
+
+
+def _motion_header(scene: Scene, snapshots: Sequence[Snapshot]) -> dict[str, Any]:
+    """Everything in :func:`motion_json` but the frames."""
+    check_run(scene, snapshots)
+    first = np.asarray(snapshots[0].joints, dtype=float)
+    lengths = np.linalg.norm(np.diff(first, axis=0), axis=1)
+    return {
+        "format": "ikgame-motion",
+        "version": 1,
+        "level": scene.level_name,
+        "fps": float(scene.fps),
+        "frame_count": len(snapshots),
+        "duration": _round(len(snapshots) / scene.fps, 6),
+        "units": {"length": "px", "angle": "rad, and deg in *_deg", "time": "s", "y_axis": "up"},
+        "conventions": {
+            "angles": "local joint angle of each link relative to its parent link, counter-clockwise",
+            "world_angles": "each link's direction relative to +x, counter-clockwise",
+            "joints": "world positions: the base, each following joint, then the end effector",
+        },
+        "link_count": len(lengths),
+        "link_lengths": [_round(v, 3) for v in lengths],
+        "link_widths": [_round(v, 3) for v in np.asarray(scene.link_widths, dtype=float)],
+    }
+
+
+def _motion_frame(snap: Snapshot) -> dict[str, Any]:
+    angles = np.asarray(snap.angles, dtype=float)
+    error = float(snap.error)
+    return {
+        "time": _round(snap.time, 6),
+        "tick": int(snap.tick),
+        "step_index": int(snap.step_index),
+        "angles_rad": [_round(a, 6) for a in angles],
+        "angles_deg": [_round(a, 4) for a in np.degrees(angles)],
+        "world_angles_rad": [_round(a, 6) for a in np.asarray(snap.world_angles, dtype=float)],
+        "joints": [[_round(x, 3), _round(y, 3)] for x, y in np.asarray(snap.joints, dtype=float)],
+        "target": None if snap.target is None else [_round(v, 3) for v in snap.target],
+        "error": _round(error, 3) if math.isfinite(error) else None,
+        "solver_status": str(snap.solver_status),
+        "torque_limited": [bool(v) for v in np.asarray(snap.torque_limited, dtype=bool)],
+    }
+
+
+def _round(value: float, digits: int) -> float:
+    # +0.0 turns -0.0 into 0.0, which would otherwise print as "-0.0" in the keyframes.
+    return round(float(value), digits) + 0.0
+
+
+def _write_motion(fp: IO[bytes], scene: Scene, snapshots: Sequence[Snapshot]) -> None:
+    """Write :func:`motion_json` as JSON: an indented header, then one line per frame so runs
+    diff well. Streamed a frame at a time: a long run's keyframes are never all in memory."""
+    head = json.dumps(_motion_header(scene, snapshots), indent=2, allow_nan=False)
+    fp.write(f'{head[:-2]},\n  "frames": [\n    '.encode())
+    for index, snap in enumerate(snapshots):
+        separator = ",\n    " if index else ""
+        fp.write((separator + json.dumps(_motion_frame(snap), allow_nan=False)).encode())
+    fp.write(b"\n  ]\n}\n")
+
+
+def write_motion(
+    out_dir: str | os.PathLike[str], scene: Scene, snapshots: Sequence[Snapshot]
+) -> Path:
+    """Write ``motion.json`` (see :func:`motion_json`) into ``out_dir`` and return its path.
+
+    >>> import tempfile
+    >>> scene = Scene("demo", np.zeros((0, 5)), np.zeros((0, 3)), np.full(1, 8.0), 100.0)
+    >>> snap = Snapshot(0.0, 0, np.array([[0.0, 0.0], [0.0, 100.0]]), np.zeros(1), np.zeros(1))
+    >>> with tempfile.TemporaryDirectory() as out:
+    ...     write_motion(out, scene, [snap]).name
+    'motion.json'
+    """
+    snapshots = tuple(snapshots)
+    check_run(scene, snapshots)
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    path = out / "motion.json"
+    with atomic_open(path) as fp:
+        _write_motion(fp, scene, snapshots)
+    return path
