@@ -177,8 +177,8 @@ def load(path: Path, tick_rate: int | None = None) -> Level:
     level = ikgame.load_level(path)
     if tick_rate is None:
         return level
-    data = level.model_dump(by_alias=True, exclude_none=True)
-    data["world"]["tick_rate"] = tick_rate
+    data = level.model_dump(by_alias=True, exclude_none=True, exclude_unset=True)
+    data.setdefault("world", {})["tick_rate"] = tick_rate
     return Level.model_validate(data)
 
 
