@@ -285,7 +285,7 @@ def solver_only_table(level) -> str:
 
 def changed(level: Level, changes: list) -> Level:
     """``level`` with each of ``changes`` applied, in order, to its data."""
-    data = level.model_dump(by_alias=True)
+    data = level.model_dump(by_alias=True, exclude_unset=True)
     for change in changes:
         change(data)
     return Level.model_validate(data)

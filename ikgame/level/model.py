@@ -188,16 +188,11 @@ def check_relative_file(name: str, suffix: str) -> None:
 
 
 def _check_sprite_fields(model: LinkConfig | _Prop) -> None:
-    """``sprite_pivot`` and ``sprite_scale`` mean nothing without a ``sprite``: say so.
-
-    A value equal to the default is let through, so that a level dumped with its defaults
-    (``model_dump``) validates again.
-    """
+    """``sprite_pivot`` and ``sprite_scale`` mean nothing without a ``sprite``: say so."""
     if model.sprite is None:
         for name in ("sprite_pivot", "sprite_scale"):
-            value = getattr(model, name)
-            if name in model.model_fields_set and value != type(model).model_fields[name].default:
-                raise _invalid((name,), "only applies with sprite", value)
+            if name in model.model_fields_set:
+                raise _invalid((name,), "only applies with sprite", getattr(model, name))
 
 
 def _png_inside(value: str) -> str:
