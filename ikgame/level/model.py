@@ -84,6 +84,17 @@ MAX_TICKS: Final = 300_000
 """Physics ticks (``duration`` x ``tick_rate``): bounds the time a run can take."""
 MAX_COORD: Final = 1.0e5
 """Largest coordinate or length, px: beyond it the camera and physics lose all meaning."""
+MIN_SIZE: Final = 0.1
+"""Smallest length, width or radius, px: a tenth of a rendered pixel. Smaller bodies have moments
+of inertia that underflow (pymunk refuses a zero moment) and Jacobians too small to invert."""
+MIN_MASS: Final = 1.0e-3
+"""Smallest mass: with :data:`MIN_SIZE` it keeps every moment of inertia a normal float."""
+MIN_SECONDS: Final = 1.0e-3
+"""Shortest time a level may name, s: two ticks at the fastest tick rate. Shorter periods make
+rates such as 2 pi / period overflow."""
+MIN_TICKS_PER_TURN: Final = 8
+"""A circling or oscillating target needs this many physics ticks per turn to be a path at all
+rather than a few points jumping about."""
 
 # Printable text only: a level's names end up in terminals and pictures.
 _NAME_PATTERN: Final = r"^[^\x00-\x1f\x7f]*$"
@@ -93,10 +104,10 @@ _THEME_NAME: Final = re.compile(r"^[A-Za-z0-9_-]+$")
 Coord = Annotated[float, Field(ge=-MAX_COORD, le=MAX_COORD, allow_inf_nan=False)]
 Vec2 = tuple[Coord, Coord]
 Region = tuple[Coord, Coord, Coord, Coord]
-Length = Annotated[float, Field(gt=0, le=MAX_COORD, allow_inf_nan=False)]
-Seconds = Annotated[float, Field(gt=0, le=MAX_DURATION, allow_inf_nan=False)]
+Length = Annotated[float, Field(ge=MIN_SIZE, le=MAX_COORD, allow_inf_nan=False)]
+Seconds = Annotated[float, Field(ge=MIN_SECONDS, le=MAX_DURATION, allow_inf_nan=False)]
 Degrees = Annotated[float, Field(ge=-180.0, le=180.0, allow_inf_nan=False)]
-Mass = Annotated[float, Field(gt=0, le=1e6, allow_inf_nan=False)]
+Mass = Annotated[float, Field(ge=MIN_MASS, le=1e6, allow_inf_nan=False)]
 Friction = Annotated[float, Field(ge=0, le=10, allow_inf_nan=False)]
 Tolerance = Annotated[float, Field(gt=0, le=1000, allow_inf_nan=False)]
 Gain = Annotated[float, Field(gt=0, le=1000, allow_inf_nan=False)]
@@ -203,6 +214,15 @@ class WorldConfig(_Model):
     def _bounds_ordered(self) -> WorldConfig:
         if self.bounds is not None:
             _check_region(self.bounds, "bounds")
+        if self.fps > self.tick_rate:
+            # A frame is taken at a tick: more frames than ticks would repeat frames and play
+            # the run back faster than it ran.
+            raise _invalid(
+                ("fps",),
+                f"{self.fps} fps is more frames than the {self.tick_rate} ticks/s of "
+                f"world.tick_rate; at most {self.tick_rate} (or raise world.tick_rate)",
+                self.fps,
+            )
         return self
 
 
@@ -223,7 +243,7 @@ class LinkConfig(_Model):
     length: Length = Field(description="Link length, px.")
     mass: Mass = Field(1.0, description="Link mass.")
     width: float = Field(
-        12.0, gt=0, le=1000, allow_inf_nan=False, description="Link thickness, px."
+        12.0, ge=MIN_SIZE, le=1000, allow_inf_nan=False, description="Link thickness, px."
     )
     limits: tuple[Degrees, Degrees] | None = Field(
         None, description="Joint limits relative to the parent link, degrees [min, max]."
@@ -329,7 +349,7 @@ class BallProp(_Prop):
     """[[props]] with kind = "ball": a dynamic disc the chain can push."""
 
     kind: Literal["ball"] = Field(description="Which kind of prop.")
-    radius: Annotated[float, Field(gt=0, le=1000, allow_inf_nan=False)] = Field(
+    radius: Annotated[float, Field(ge=MIN_SIZE, le=1000, allow_inf_nan=False)] = Field(
         description="Radius, px."
     )
 
@@ -339,8 +359,8 @@ class BoxProp(_Prop):
 
     kind: Literal["box"] = Field(description="Which kind of prop.")
     size: tuple[
-        Annotated[float, Field(gt=0, le=2000, allow_inf_nan=False)],
-        Annotated[float, Field(gt=0, le=2000, allow_inf_nan=False)],
+        Annotated[float, Field(ge=MIN_SIZE, le=2000, allow_inf_nan=False)],
+        Annotated[float, Field(ge=MIN_SIZE, le=2000, allow_inf_nan=False)],
     ] = Field(description="Width and height, px.")
 
 
@@ -586,6 +606,40 @@ def step_count(script: list[Step] | tuple[Step, ...]) -> int:
     return sum(len(s.sequence) if isinstance(s, SequenceStep) else 1 for s in script)
 
 
+def _check_script_timing(script: list[Step], tick_rate: int) -> None:
+    """Refuse scripts whose ``set`` steps never apply and paths that turn faster than ticks."""
+    timed = [i for i, step in enumerate(script) if not isinstance(step, SetStep)]
+    if not timed:
+        raise _invalid(
+            ("script",),
+            "the script has only set steps, which take no time, so the run would end before "
+            "any change applied; add a reach, follow, wait or sequence step",
+            None,
+        )
+    if timed[-1] < len(script) - 1:
+        raise _invalid(
+            ("script", timed[-1] + 1),
+            "a set step at the end of the script never applies (the run ends with the last "
+            "step that takes time); put it before a step, or add a wait after it",
+            None,
+        )
+    for i, step in enumerate(script):
+        if isinstance(step, FollowCircle):
+            turns, field, value = 1.0 / step.period, "period", step.period
+        elif isinstance(step, FollowLissajous):
+            turns, field, value = max(step.frequency), "frequency", list(step.frequency)
+        else:
+            continue
+        if turns * MIN_TICKS_PER_TURN > tick_rate:
+            raise _invalid(
+                ("script", i, field),
+                f"{turns:g} turns per second at {tick_rate} ticks/s leaves "
+                f"{tick_rate / turns:.3g} ticks per turn; at least {MIN_TICKS_PER_TURN} "
+                f"(at most {tick_rate / MIN_TICKS_PER_TURN:g} turns/s, or raise world.tick_rate)",
+                value,
+            )
+
+
 class Level(_Model):
     """A whole level file. Load one with :func:`ikgame.level.loader.load_level`.
 
@@ -630,6 +684,14 @@ class Level(_Model):
                 f"{MAX_TICKS} (shorten the level or lower world.tick_rate)",
                 duration,
             )
+        if round(ticks) < 1:
+            raise _invalid(
+                ("level", "duration"),
+                f"{duration:g} s at {self.world.tick_rate} ticks/s is less than one tick; at "
+                f"least {1 / self.world.tick_rate:.3g} s",
+                duration,
+            )
+        _check_script_timing(self.script, self.world.tick_rate)
         steps = step_count(self.script)
         if steps > MAX_STEPS:
             raise _invalid(
