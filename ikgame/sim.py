@@ -79,6 +79,7 @@ class RunResult:
         goals: per-goal outcomes.
         score: 0..100, see :mod:`ikgame.level.scoring`.
         expect: the status the level is designed to end with.
+        divergence: for a ``diverged`` run, the body that blew up and the tick, else empty.
     """
 
     level: str
@@ -91,6 +92,7 @@ class RunResult:
     goals: tuple[GoalOutcome, ...] = ()
     score: float = 0.0
     expect: str = "passed"
+    divergence: str = ""
 
     def as_dict(self) -> dict[str, object]:
         """Plain data in a fixed key order."""
@@ -109,7 +111,7 @@ class RunResult:
             "steps": [s.as_dict() for s in self.steps],
             "goals": [g.as_dict() for g in self.goals],
             "options": dict(self.options),
-        }
+        } | ({"divergence": self.divergence} if self.divergence else {})
 
 
 class Simulation:
@@ -145,6 +147,7 @@ class Simulation:
         self.dt = 1.0 / level.world.tick_rate
         self.tick = 0
         self.diverged = False
+        self._divergence = ""
         self.record = record
         self.snapshots: list[Snapshot] = []
         self._override: np.ndarray | None = None
@@ -213,6 +216,7 @@ class Simulation:
         self.tick += 1
         if self.world.diverged():
             self.diverged = True
+            self._divergence = f"{self.world.divergence()} blew up at tick {self.tick}"
             return self._last
         if self.world.skeleton is not self.controller.skeleton:
             # The base moved: the solver must work from where it is now.
@@ -283,6 +287,7 @@ class Simulation:
                 diverged=self.diverged,
             ),
             expect=self.level.level.expect,
+            divergence=self._divergence,
         )
         if self.done:
             self._result = result
