@@ -1,16 +1,34 @@
-"""Atomic file writes: a reader sees the old file or the new one, never half of one."""
+"""Atomic file writes (a reader sees the old file or the new one, never half of one), and the
+output folder a run writes into."""
 
 from __future__ import annotations
 
 import json
 import os
+import re
+import tempfile
 import uuid
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
 from typing import IO
 
-__all__ = ["atomic_open", "write_atomic", "write_json"]
+__all__ = ["atomic_open", "write_atomic", "write_json", "prepare_out_dir", "OUTPUT_FILES"]
+
+OUTPUT_FILES = (
+    "results.json",  # first: a folder never claims a completed run it does not hold
+    "motion.json",
+    "run.gif",
+    "run.png",
+    "sheet.png",
+    "compare.json",
+    "compare.png",
+)
+"""The files a command writes at the top of its output folder."""
+FRAMES_DIR = "frames"
+_FRAME = re.compile(r"\d{6}\.png")
+_TEMP = re.compile(r"\..+\.[0-9a-f]{12}\.tmp")
+"""The temporary names of :func:`atomic_open`, left behind only by a killed process."""
 
 
 @contextmanager
@@ -61,3 +79,71 @@ def write_json(path: str | Path, data: object) -> Path:
     """
     text = json.dumps(data, indent=2, allow_nan=False, ensure_ascii=False) + "\n"
     return write_atomic(path, text.encode("utf-8"))
+
+
+def prepare_out_dir(path: str | os.PathLike[str], force: bool) -> Path:
+    """Make ``path`` ready for a new run, or raise ``ValueError`` before anything is written.
+
+    A missing or empty folder is fine; one with files in it only with ``force``, and then the
+    files an earlier run wrote there (:data:`OUTPUT_FILES`, ``frames/NNNNNN.png``, temporary
+    files of a killed run) are removed first, ``results.json`` before the rest, so the folder
+    never mixes two runs. Nothing else is touched, and symlinks are never followed: an output
+    name that is a symlink or a folder is refused. The folder is created and a probe file
+    written to prove it is writable; on failure the folders made are removed again.
+
+    >>> import tempfile, pathlib
+    >>> out = pathlib.Path(tempfile.mkdtemp()) / "run"
+    >>> prepare_out_dir(out, force=False).is_dir()
+    True
+    """
+    out = Path(path)
+    if out.is_symlink() and not out.exists():
+        raise ValueError(f"output path {out} is a symlink to nothing")
+    if out.exists() and not out.is_dir():
+        raise ValueError(f"output path {out} exists and is not a folder")
+    if out.is_dir():
+        if not force and any(out.iterdir()):
+            raise ValueError(
+                f"output folder {out} is not empty; use --force to replace the run in it"
+            )
+        for name in (*OUTPUT_FILES, FRAMES_DIR):
+            entry = out / name
+            wanted = entry.is_dir() if name == FRAMES_DIR else entry.is_file()
+            if entry.is_symlink() or (entry.exists() and not wanted):
+                kind = "a symlink" if entry.is_symlink() else "not what ikgame writes there"
+                raise ValueError(f"{entry} is {kind}; move it away, ikgame writes only real files")
+    made = _make_dirs(out)
+    try:
+        with tempfile.TemporaryFile(dir=out):
+            pass
+    except OSError as exc:
+        for folder in reversed(made):
+            folder.rmdir()
+        raise ValueError(f"cannot write into {out} ({exc.strerror})") from None
+    _clear_run(out)
+    return out
+
+
+def _make_dirs(out: Path) -> list[Path]:
+    """Create ``out`` and its missing parents; return the folders made, outermost first."""
+    missing = [p for p in (out, *out.parents) if not p.exists()][::-1]
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        for folder in reversed([p for p in missing if p.is_dir()]):
+            folder.rmdir()
+        raise ValueError(f"cannot create {out} ({exc.strerror})") from None
+    return missing
+
+
+def _clear_run(out: Path) -> None:
+    for name in OUTPUT_FILES:
+        (out / name).unlink(missing_ok=True)
+    frames = out / FRAMES_DIR
+    for folder in (out, frames) if frames.is_dir() else (out,):
+        for entry in folder.iterdir():
+            ours = _TEMP.fullmatch(entry.name) or (
+                folder == frames and _FRAME.fullmatch(entry.name)
+            )
+            if ours and entry.is_file() and not entry.is_symlink():
+                entry.unlink()

@@ -47,7 +47,10 @@ def test_bad_level_exits_2_with_file_line_and_field(tmp_path, capsys):
     out = tmp_path / "out"
     assert main(["run", str(bad), "--out", str(out)]) == 2
     err = capsys.readouterr().err
-    assert f"{bad}:6: chain.links[0].length: Input should be greater than 0 (got -3)" in err
+    assert (
+        f"{bad}:6: chain.links[0].length: Input should be greater than or equal to 0.1 (got -3)"
+        in err
+    )
     assert "Traceback" not in err
     assert not out.exists()
 
@@ -129,8 +132,14 @@ def test_validate_lists_every_problem_and_exits_2(tmp_path, capsys):
     bad.write_text('[level]\nname = "x"\nduration = -1\n[chain]\n[[chain.links]]\nlength = 0\n')
     assert main(["validate", str(ROOT / "levels"), str(bad)]) == 2
     err = capsys.readouterr().err.splitlines()
-    assert f"error: {bad}:3: level.duration: Input should be greater than 0 (got -1)" in err
-    assert f"error: {bad}:6: chain.links[0].length: Input should be greater than 0 (got 0)" in err
+    assert (
+        f"error: {bad}:3: level.duration: Input should be greater than or equal to 0.001 (got -1)"
+        in err
+    )
+    assert (
+        f"error: {bad}:6: chain.links[0].length: Input should be greater than or equal to 0.1 (got 0)"
+        in err
+    )
     assert f"error: {bad}: script: Field required" in err
 
 
