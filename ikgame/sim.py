@@ -21,6 +21,7 @@ import numpy as np
 
 from ikgame.control.controller import Controller
 from ikgame.level.model import (
+    MAX_COORD,
     BallProp,
     CircleObstacle,
     FollowCircle,
@@ -177,10 +178,7 @@ class Simulation:
         if point is None:
             self._override = None
             return
-        arr = np.asarray(point, dtype=float)
-        if arr.shape != (2,) or not np.all(np.isfinite(arr)):
-            raise ValueError(f"target must be a finite (x, y) pair in px, got {point!r}")
-        self._override = arr
+        self._override = _check_target(point)
 
     @property
     def done(self) -> bool:
@@ -311,6 +309,31 @@ class Simulation:
             torque_limited=self._last.torque_limited.copy(),
             props=self.world.prop_states(),
         )
+
+
+def _check_target(point: object) -> np.ndarray:
+    """``point`` as a (2,) float array, or ``ValueError``: two real numbers (not strings, not
+    bools), each within ``MAX_COORD`` px of the origin, the range of every level coordinate.
+
+    >>> _check_target((3, 4.5)).tolist()
+    [3.0, 4.5]
+    >>> _check_target(("1", "2"))
+    Traceback (most recent call last):
+    ...
+    ValueError: target must be two numbers (x, y) in px within +-100000, got ('1', '2')
+    """
+    values = list(point) if isinstance(point, tuple | list | np.ndarray) else None
+    ok = values is not None and len(values) == 2
+    ok = ok and all(
+        isinstance(v, int | float | np.integer | np.floating) and not isinstance(v, bool | np.bool_)
+        for v in values
+    )
+    arr = np.asarray(values if ok else (math.nan, math.nan), dtype=float)
+    if not (ok and arr.shape == (2,) and np.all(np.abs(arr) <= MAX_COORD)):
+        raise ValueError(
+            f"target must be two numbers (x, y) in px within +-{MAX_COORD:g}, got {point!r}"
+        )
+    return arr
 
 
 def run_level(level: Level, *, solver: str | None = None, record: bool = True) -> Simulation:

@@ -37,6 +37,7 @@ __all__ = [
     "MAX_GOALS",
     "MAX_FRAMES",
     "MAX_TICKS",
+    "MAX_COORD",
     "SOLVER_NAMES",
     "FOLLOW_SHAPES",
     "Level",
