@@ -90,12 +90,16 @@ MIN_SIZE: Final = 0.1
 of inertia that underflow (pymunk refuses a zero moment) and Jacobians too small to invert."""
 MIN_MASS: Final = 1.0e-3
 """Smallest mass: with :data:`MIN_SIZE` it keeps every moment of inertia a normal float."""
+MAX_MASS_RATIO: Final = 1000.0
+"""Largest mass ratio of two joined links: pymunk's iterative joint solver spreads an impulse in
+proportion to the inverse masses, and past about 10^4 the light link is thrown about."""
 MIN_SECONDS: Final = 1.0e-3
 """Shortest time a level may name, s: two ticks at the fastest tick rate. Shorter periods make
 rates such as 2 pi / period overflow."""
 MIN_TICKS_PER_TURN: Final = 8
 """A circling or oscillating target needs this many physics ticks per turn to be a path at all
-rather than a few points jumping about."""
+rather than a few points jumping about; a base move needs as many ticks to accelerate the chain
+rather than teleport its pivot (which the joint solver answers with unbounded impulses)."""
 
 # Printable text only: a level's names end up in terminals and pictures.
 _NAME_PATTERN: Final = r"^[^\x00-\x1f\x7f]*$"
@@ -296,6 +300,26 @@ class ChainConfig(_Model):
         if total > MAX_LINKS:
             raise _invalid(
                 ("links",), f"a chain has at most {MAX_LINKS} links, this one has {total}", total
+            )
+        for i, (before, link) in enumerate(zip(self.links, self.links[1:], strict=False), start=1):
+            ratio = max(before.mass, link.mass) / min(before.mass, link.mass)
+            if ratio > MAX_MASS_RATIO:
+                raise _invalid(
+                    ("links", i, "mass"),
+                    f"{link.mass:g} is {ratio:.3g} times {'more' if link.mass > before.mass else 'less'} "
+                    f"than the mass of the link before it ({before.mass:g}); joined links may "
+                    f"differ at most {MAX_MASS_RATIO:g} times, beyond that the physics cannot "
+                    "hold the joint between them and blows up",
+                    link.mass,
+                )
+        reach = sum(link.length * link.repeat for link in self.links)
+        if reach > MAX_COORD:
+            # Every coordinate is within MAX_COORD; a longer chain would reach where the
+            # physics counts a body as blown up.
+            raise _invalid(
+                ("links",),
+                f"the links add up to {reach:g} px; at most {MAX_COORD:g} (shorten the links)",
+                reach,
             )
         return self
 
@@ -607,6 +631,74 @@ def step_count(script: list[Step] | tuple[Step, ...]) -> int:
     return sum(len(s.sequence) if isinstance(s, SequenceStep) else 1 for s in script)
 
 
+def _check_start_clear(
+    chain: ChainConfig, obstacles: list[SegmentObstacle | CircleObstacle]
+) -> None:
+    """Refuse a chain that starts inside an obstacle: link 1 is pinned to the base, so the
+    physics would push the link out against a joint it cannot move, without bound."""
+    angle = math.radians(chain.angle)
+    joint = chain.base
+    for k, link in enumerate(chain.expanded_links):
+        low, high = link.limits or (0.0, 0.0)
+        angle += math.radians(min(max(0.0, low), high))
+        end = (joint[0] + link.length * math.cos(angle), joint[1] + link.length * math.sin(angle))
+        for j, obstacle in enumerate(obstacles):
+            if isinstance(obstacle, SegmentObstacle):
+                gap = _segments_distance(joint, end, obstacle.a, obstacle.b)
+            else:
+                gap = _point_segment_distance(obstacle.center, joint, end)
+            overlap = link.width / 2 + obstacle.radius - gap
+            if overlap > 0:
+                raise _invalid(
+                    ("obstacles", j),
+                    f"link {k + 1} of the chain starts inside this obstacle (by {overlap:.3g} "
+                    "px); the chain hangs from a fixed base and could not be pushed out: move "
+                    "the obstacle or change chain.base / chain.angle",
+                    None,
+                )
+        joint = end
+
+
+def _point_segment_distance(
+    p: tuple[float, float], a: tuple[float, float], b: tuple[float, float]
+) -> float:
+    """Distance from point ``p`` to the segment ``ab``, px.
+
+    >>> _point_segment_distance((0.0, 5.0), (-1.0, 0.0), (1.0, 0.0))
+    5.0
+    """
+    dx, dy = b[0] - a[0], b[1] - a[1]
+    length2 = dx * dx + dy * dy
+    t = 0.0 if length2 == 0 else ((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / length2
+    t = min(1.0, max(0.0, t))
+    return math.hypot(p[0] - a[0] - t * dx, p[1] - a[1] - t * dy)
+
+
+def _segments_distance(
+    a: tuple[float, float],
+    b: tuple[float, float],
+    c: tuple[float, float],
+    d: tuple[float, float],
+) -> float:
+    """Distance between the segments ``ab`` and ``cd``, px (0 when they cross).
+
+    >>> _segments_distance((-1.0, 0.0), (1.0, 0.0), (0.0, -1.0), (0.0, 1.0))
+    0.0
+    """
+
+    def side(p: tuple[float, float], q: tuple[float, float], r: tuple[float, float]) -> float:
+        return (q[0] - p[0]) * (r[1] - p[1]) - (q[1] - p[1]) * (r[0] - p[0])
+
+    if side(a, b, c) * side(a, b, d) < 0 and side(c, d, a) * side(c, d, b) < 0:
+        return 0.0
+    return min(
+        _point_segment_distance(a, c, d),
+        _point_segment_distance(b, c, d),
+        _point_segment_distance(c, a, b),
+        _point_segment_distance(d, a, b),
+    )
+
+
 def _check_script_timing(script: list[Step], tick_rate: int) -> None:
     """Refuse scripts whose ``set`` steps never apply and paths that turn faster than ticks."""
     timed = [i for i, step in enumerate(script) if not isinstance(step, SetStep)]
@@ -625,6 +717,17 @@ def _check_script_timing(script: list[Step], tick_rate: int) -> None:
             None,
         )
     for i, step in enumerate(script):
+        if isinstance(step, SetStep) and step.set.base is not None:
+            ticks = step.set.over * tick_rate
+            if ticks < MIN_TICKS_PER_TURN:
+                raise _invalid(
+                    ("script", i, "set", "over"),
+                    f"{step.set.over:g} s is {ticks:.3g} ticks at {tick_rate} ticks/s; a base "
+                    f"move needs at least {MIN_TICKS_PER_TURN} ticks (over >= "
+                    f"{MIN_TICKS_PER_TURN / tick_rate:.3g} s), or it yanks the chain apart",
+                    step.set.over,
+                )
+            continue
         if isinstance(step, FollowCircle):
             turns, field, value = 1.0 / step.period, "period", step.period
         elif isinstance(step, FollowLissajous):
@@ -693,6 +796,7 @@ class Level(_Model):
                 duration,
             )
         _check_script_timing(self.script, self.world.tick_rate)
+        _check_start_clear(self.chain, self.obstacles)
         steps = step_count(self.script)
         if steps > MAX_STEPS:
             raise _invalid(
