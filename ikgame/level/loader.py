@@ -196,6 +196,9 @@ def parse_level(text: str, file: str = "<level>") -> Level:
         message = str(exc)
         at = _TOML_AT.search(message)
         line = int(at.group(1)) if at else None
+        if message.endswith("(at end of document)"):
+            line = text.count("\n") + (not text.endswith("\n"))
+            message = message.removesuffix(" (at end of document)") + " (at the end of the file)"
         if at:
             message = f"{message[: at.start()]}(column {at.group(2)})"
         raise LevelError([Problem(file, line, "", f"invalid TOML: {message}")]) from None
@@ -377,6 +380,8 @@ def _tables(text: str) -> dict[tuple[object, ...], int]:
             counts[keys] = counts.get(keys, 0) + 1
             path.append(counts[keys] - 1)
         tables[tuple(path)] = number
+        for cut in range(1, len(path)):  # ``[a.b]`` defines ``a`` too, on the same line
+            tables.setdefault(tuple(path[:cut]), number)
     return tables
 
 
