@@ -147,3 +147,5 @@ def _clear_run(out: Path) -> None:
             )
             if ours and entry.is_file() and not entry.is_symlink():
                 entry.unlink()
+    if frames.is_dir() and not frames.is_symlink() and not any(frames.iterdir()):
+        frames.rmdir()
