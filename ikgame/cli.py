@@ -113,7 +113,8 @@ def _handle(args: argparse.Namespace, err: Console) -> int:
         if exc.errno not in _DISK_ERRORS or getattr(args, "debug", False):
             return _internal(args, err, exc)
         where = f" {exc.filename}" if exc.filename else ""
-        err.print(f"[bold red]error:[/] {escape(f'cannot write{where}: {exc.strerror}')}")
+        message = escape(f"cannot write{where}: {exc.strerror}")
+        err.print(f"[bold red]error:[/] {message}", soft_wrap=True)
         return EXIT_BAD_INPUT
     except Exception as exc:  # the last line of defence: report, never a bare traceback
         return _internal(args, err, exc)
@@ -450,7 +451,9 @@ def _cmd_check(args: argparse.Namespace) -> int:
     level_path = resolve_level(args.level if args.level is not None else rerun["level"])
     console = _console(quiet=args.quiet)
     if (sha := file_sha256(level_path)) != prov["level_sha256"]:
-        console.print(escape(f"{level_path} has changed since the run (sha256 {sha[:12]}...)"))
+        console.print(
+            escape(f"{level_path} has changed since the run (sha256 {sha[:12]}...)"), soft_wrap=True
+        )
         return EXIT_NOT_REPRODUCED
     level, theme, named = _load(level_path, options.theme)
     with _usage("size"):
@@ -462,13 +465,18 @@ def _cmd_check(args: argparse.Namespace) -> int:
         )
     found = differences(recorded, json.loads(json.dumps(again)))
     if found:
-        console.print(escape(f"{args.results}: does not reproduce; differences (recorded -> now):"))
+        console.print(
+            escape(f"{args.results}: does not reproduce; differences (recorded -> now):"),
+            soft_wrap=True,
+        )
         for line in found:
             console.print(escape(f"  {line}"), soft_wrap=True)
         return EXIT_NOT_REPRODUCED
     frames = again["outputs"].get("frames", {}).get("count", 0)  # type: ignore[union-attr]
     extra = f", {frames} frames identical" if frames else ""
-    console.print(escape(f"{args.results}: reproduces exactly ({again['status']}{extra})"))
+    console.print(
+        escape(f"{args.results}: reproduces exactly ({again['status']}{extra})"), soft_wrap=True
+    )
     return EXIT_OK
 
 

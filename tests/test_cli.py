@@ -332,3 +332,18 @@ def test_check_reproduces_a_run_and_reports_a_difference(tmp_path, capsys):
     assert "steps[0].final_error" in capsys.readouterr().out
     (out / "results.json").write_text("{}")
     assert main(["check", str(out / "results.json")]) == 2
+
+
+def test_a_full_disk_during_the_export_exits_2_and_says_so(tmp_path, capsys, monkeypatch):
+    import errno
+
+    import ikgame.cli
+
+    def full(*args, **kwargs):
+        raise OSError(errno.ENOSPC, "No space left on device", str(tmp_path / "out" / "run.gif"))
+
+    monkeypatch.setattr(ikgame.cli, "export_run", full)
+    assert main(["run", "--quiet", "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert "cannot write" in err and "run.gif: No space left on device" in err
+    assert not (tmp_path / "out" / "results.json").exists()
