@@ -18,10 +18,29 @@ ROOT = Path(__file__).resolve().parents[1]
 pytestmark = pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="reads /proc")
 
 
+# Long enough (900 frames) that the export is still running when the signal comes; small frames
+# so that the whole export takes a few seconds when it is not stopped.
+LEVEL = """
+[level]
+name = "long"
+duration = 30.0
+[chain]
+[[chain.links]]
+length = 80.0
+repeat = 3
+[[script]]
+reach = [120.0, 100.0]
+[[script]]
+wait = 30.0
+"""
+
+
 def _start(out: Path, *extra: str) -> subprocess.Popen[str]:
+    level = out.parent / "long.toml"
+    level.write_text(LEVEL)
     return subprocess.Popen(
-        [sys.executable, "-m", "ikgame", "run", "01_first_reach", "--out", str(out), "--quiet"]
-        + list(extra),
+        [sys.executable, "-m", "ikgame", "run", str(level), "--out", str(out), "--quiet"]
+        + ["--size", "160x90", *extra],
         cwd=ROOT,
         env=os.environ | {"PYTHONPATH": str(ROOT)},
         stdout=subprocess.PIPE,
