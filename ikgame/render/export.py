@@ -29,7 +29,7 @@ from concurrent.futures import Future, ProcessPoolExecutor
 from contextlib import ExitStack, contextmanager
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import IO, Any
 
 import numpy as np
 from PIL import Image, ImageDraw, ImageFont
@@ -134,6 +134,12 @@ def motion_json(scene: Scene, snapshots: Sequence[Snapshot]) -> dict[str, Any]:
     >>> motion["link_lengths"], motion["frames"][0]["angles_deg"]
     ([100.0], [90.0002])
     """
+    return _motion_header(scene, snapshots) | {
+        "frames": [_motion_frame(snap) for snap in snapshots]
+    }
+
+
+def _motion_header(scene: Scene, snapshots: Sequence[Snapshot]) -> dict[str, Any]:
     _check_run(scene, snapshots)
     first = np.asarray(snapshots[0].joints, dtype=float)
     lengths = np.linalg.norm(np.diff(first, axis=0), axis=1)
@@ -153,7 +159,6 @@ def motion_json(scene: Scene, snapshots: Sequence[Snapshot]) -> dict[str, Any]:
         "link_count": len(lengths),
         "link_lengths": [_round(v, 3) for v in lengths],
         "link_widths": [_round(v, 3) for v in np.asarray(scene.link_widths, dtype=float)],
-        "frames": [_motion_frame(snap) for snap in snapshots],
     }
 
 
@@ -180,12 +185,18 @@ def _round(value: float, digits: int) -> float:
     return round(float(value), digits) + 0.0
 
 
-def _motion_bytes(motion: dict[str, Any]) -> bytes:
-    """The motion as JSON: an indented header, then one line per frame so runs diff well."""
-    header = {key: value for key, value in motion.items() if key != "frames"}
-    head = json.dumps(header, indent=2, allow_nan=False)
-    frames = ",\n    ".join(json.dumps(f, allow_nan=False) for f in motion["frames"])
-    return f'{head[:-2]},\n  "frames": [\n    {frames}\n  ]\n}}\n'.encode()
+def _write_motion(handle: IO[bytes], scene: Scene, snapshots: Sequence[Snapshot]) -> None:
+    """The motion as JSON: an indented header, then one line per frame so runs diff well.
+
+    Streamed a frame at a time: the whole document of a long run of many links would take
+    gigabytes as Python objects.
+    """
+    head = json.dumps(_motion_header(scene, snapshots), indent=2, allow_nan=False)
+    handle.write(f'{head[:-2]},\n  "frames": [\n'.encode())
+    for i, snap in enumerate(snapshots):
+        line = json.dumps(_motion_frame(snap), allow_nan=False)
+        handle.write((",\n    " if i else "    ").encode() + line.encode())
+    handle.write(b"\n  ]\n}\n")
 
 
 # -- one frame -----------------------------------------------------------------------------------
@@ -465,8 +476,9 @@ def export_run(
     if sheet:
         written.append(write_atomic(out / "sheet.png", _png_bytes(_contact_sheet(job, samples))))
     if motion:
-        data = _motion_bytes(motion_json(scene, snapshots))
-        written.append(write_atomic(out / "motion.json", data))
+        with atomic_open(out / "motion.json") as handle:
+            _write_motion(handle, scene, snapshots)
+        written.append(out / "motion.json")
     return written
 
 
