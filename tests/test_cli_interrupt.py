@@ -107,7 +107,7 @@ def test_a_stopped_export_exits_cleanly_and_keeps_whole_frames(tmp_path, sig, co
         with Image.open(frame) as image:
             image.verify()
     # Workers and multiprocessing's resource tracker leave on their own, within a second or so.
-    _wait_for(lambda: not [pid for pid in workers if _alive(pid)], "the workers to exit", 20)
+    _wait_for(lambda: not [pid for pid in workers if _alive(pid)], "the workers to exit", 60)
 
 
 def test_after_sigkill_the_workers_die_and_a_forced_rerun_leaves_one_whole_run(tmp_path):
@@ -118,7 +118,7 @@ def test_after_sigkill_the_workers_die_and_a_forced_rerun_leaves_one_whole_run(t
     assert workers, "the export runs in worker processes"
     proc.kill()
     proc.communicate(timeout=60)
-    _wait_for(lambda: not [pid for pid in workers if _alive(pid)], "orphaned workers to exit", 20)
+    _wait_for(lambda: not [pid for pid in workers if _alive(pid)], "orphaned workers to exit", 60)
     rerun = _start(out, "--force", "--no-gif")
     _, err = rerun.communicate(timeout=300)
     assert rerun.returncode == 0, err
