@@ -13,7 +13,14 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import IO
 
-__all__ = ["atomic_open", "write_atomic", "write_json", "prepare_out_dir", "OUTPUT_FILES"]
+__all__ = [
+    "atomic_open",
+    "write_atomic",
+    "write_json",
+    "prepare_out_dir",
+    "remove_temporaries",
+    "OUTPUT_FILES",
+]
 
 OUTPUT_FILES = (
     "results.json",  # first: a folder never claims a completed run it does not hold
@@ -45,9 +52,10 @@ def atomic_open(path: str | Path) -> Iterator[IO[bytes]]:
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     temp = path.with_name(f".{path.name}.{uuid.uuid4().hex[:12]}.tmp")
-    # Mode 0o666 lets the umask decide, as for any new file (mkstemp would make it private).
-    fd = os.open(temp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_BINARY", 0), 0o666)
     try:
+        # Opened inside the try: a Ctrl-C or SIGTERM right after the file exists still removes
+        # it. Mode 0o666 lets the umask decide, as for any new file (mkstemp makes it private).
+        fd = os.open(temp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_BINARY", 0), 0o666)
         with os.fdopen(fd, "wb") as handle:
             yield handle
         os.replace(temp, path)
@@ -139,13 +147,28 @@ def _make_dirs(out: Path) -> list[Path]:
 def _clear_run(out: Path) -> None:
     for name in OUTPUT_FILES:
         (out / name).unlink(missing_ok=True)
+    remove_temporaries(out, frames=True)
     frames = out / FRAMES_DIR
-    for folder in (out, frames) if frames.is_dir() else (out,):
-        for entry in folder.iterdir():
-            ours = _TEMP.fullmatch(entry.name) or (
-                folder == frames and _FRAME.fullmatch(entry.name)
-            )
-            if ours and entry.is_file() and not entry.is_symlink():
-                entry.unlink()
     if frames.is_dir() and not frames.is_symlink() and not any(frames.iterdir()):
         frames.rmdir()
+
+
+def remove_temporaries(out: Path, *, frames: bool = False) -> None:
+    """Remove the temporary files of :func:`atomic_open` from ``out`` and ``out/frames`` (and
+    with ``frames``, the frame files too): what a stopped or killed run left behind. Symlinks
+    are never followed.
+
+    >>> import tempfile, pathlib
+    >>> out = pathlib.Path(tempfile.mkdtemp())
+    >>> _ = (out / ".run.gif.0123456789ab.tmp").write_bytes(b"")
+    >>> remove_temporaries(out); list(out.iterdir())
+    []
+    """
+    folder = out / FRAMES_DIR
+    for place in (out, folder) if folder.is_dir() and not folder.is_symlink() else (out,):
+        for entry in place.iterdir():
+            ours = _TEMP.fullmatch(entry.name) or (
+                frames and place == folder and _FRAME.fullmatch(entry.name)
+            )
+            if ours and entry.is_file() and not entry.is_symlink():
+                entry.unlink(missing_ok=True)

@@ -26,7 +26,7 @@ from rich.markup import escape
 from rich.table import Table
 
 import ikgame
-from ikgame._files import prepare_out_dir, write_atomic, write_json
+from ikgame._files import prepare_out_dir, remove_temporaries, write_atomic, write_json
 from ikgame._progress import progress_bar
 from ikgame.budget import DEFAULT_BUDGET_MINUTES, RunEstimate, estimate_run
 from ikgame.compare import compare_level, comparison_table, write_comparison
@@ -366,6 +366,8 @@ def _run_into(
                 progress=enabled,
             )
     except KeyboardInterrupt as exc:
+        if out.is_dir():
+            remove_temporaries(out)
         frames = sum(1 for _ in (out / "frames").glob("[0-9]*.png"))
         kept = f"{frames} frames in {out / 'frames'}" if frames else f"nothing in {out}"
         exc.add_note(f"the run was cut short: kept {kept}, no results.json")
