@@ -14,7 +14,8 @@ from ikgame.kinematics import SOLVERS, Skeleton, Solution, SolveStatus, get_solv
 from ikgame.level import DEFAULT_LEVEL, Level, LevelError, load_level, parse_level
 from ikgame.render import Camera, PillowDrawOptions, export_run, load_theme, render_snapshot
 from ikgame.sim import RunResult, Simulation, TickInfo, run_level
-from ikgame.snapshot import Scene, Snapshot
+from ikgame.skins import skin_scene
+from ikgame.snapshot import Scene, Snapshot, Sprite
 
 __version__ = "0.1.0"
 
@@ -31,6 +32,7 @@ __all__ = [
     "Simulation",
     "Skeleton",
     "Snapshot",
+    "Sprite",
     "Solution",
     "SolveStatus",
     "TickInfo",
@@ -42,4 +44,5 @@ __all__ = [
     "parse_level",
     "render_snapshot",
     "run_level",
+    "skin_scene",
 ]

@@ -28,6 +28,7 @@ OUTPUT_FILES = (
     "run.gif",
     "run.png",
     "sheet.png",
+    "run.mp4",
     "compare.json",
     "compare.png",
 )

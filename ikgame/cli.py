@@ -16,7 +16,8 @@ import re
 import signal
 import sys
 import tempfile
-from collections.abc import Iterator, Sequence
+import threading
+from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import replace
 from pathlib import Path
@@ -31,13 +32,22 @@ from ikgame._progress import progress_bar
 from ikgame.budget import DEFAULT_BUDGET_MINUTES, RunEstimate, estimate_run
 from ikgame.compare import compare_level, comparison_table, write_comparison
 from ikgame.level.library import DEFAULT_LEVEL, resolve_level
-from ikgame.level.loader import LevelError, Problem, level_theme, load_level
+from ikgame.level.loader import (
+    LevelError,
+    Problem,
+    level_theme,
+    load_level,
+    sprite_fields,
+    sprite_file,
+)
 from ikgame.level.model import SOLVER_NAMES, Level
 from ikgame.level.tools import level_rows, schema_text, validate_files
 from ikgame.provenance import differences, file_sha256, output_hashes, provenance
 from ikgame.render.export import export_run, parse_size
 from ikgame.render.theme import Theme, ThemeError, available_themes, load_theme
+from ikgame.render.video import check_video
 from ikgame.sim import RunResult, Simulation
+from ikgame.skins import skin_scene
 
 __all__ = ["main"]
 
@@ -68,6 +78,7 @@ writes into DIR:
   run.gif        the whole run, looping
   motion.json    baked motion: per frame every joint's angle and position, for a game engine
   run.png        an animated PNG (with --apng)     sheet.png  a contact sheet (with --sheet)
+  run.mp4        H.264 video at the level's fps (with --mp4; needs: pip install 'ikgame[video]')
 before it starts, a run's cost is estimated from the level (ticks x links x iterations,
 obstacles, props, frames x pixels); above --budget (default 30 minutes) it is refused.
 
@@ -195,6 +206,12 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--apng", action="store_true", help="also write run.png, an animated PNG")
     run.add_argument("--sheet", action="store_true", help="also write sheet.png, a contact sheet")
     run.add_argument(
+        "--mp4",
+        action="store_true",
+        help="also write run.mp4 (H.264, yuv420p; an odd side loses one pixel); needs the video "
+        "extra",
+    )
+    run.add_argument(
         "--size", default="960x540", metavar="WxH", help="frame size in pixels (default: 960x540)"
     )
     run.add_argument(
@@ -278,6 +295,7 @@ def _parser() -> argparse.ArgumentParser:
     )
     schema.add_argument("--out", metavar="FILE", type=Path, help="write it to FILE instead")
     schema.set_defaults(handler=_cmd_schema)
+    _live_commands(sub)
     return parser
 
 
@@ -325,6 +343,11 @@ def _cmd_run(args: argparse.Namespace) -> int:
         size = parse_size(args.size)
     if args.workers is not None and args.workers < 1:
         raise UsageError(f"--workers: must be at least 1, got {args.workers}")
+    if args.mp4:
+        if args.no_frames:
+            raise UsageError("--mp4: there are no pictures to encode with --no-frames")
+        with _usage("--mp4"):
+            check_video()
     _check_budget(estimate_run(level, frame_size=None if args.no_frames else size), args)
     with _usage("--out"):
         prepare_out_dir(out, args.force)
@@ -348,6 +371,8 @@ def _run_into(
     (and says so)."""
     try:
         sim = Simulation(level, solver=args.solver, record=not args.no_frames)
+        # Sprites are decoded before the run, so an image that cannot be used stops it at once.
+        scene = sim.scene if args.no_frames else skin_scene(sim.scene, level, level_path)
         enabled = _interactive(console)
         with progress_bar("simulating", 1.0, enabled=enabled, console=console) as update:
             result = sim.run(update)
@@ -355,13 +380,14 @@ def _run_into(
         if not args.no_frames:
             written = export_run(
                 out,
-                sim.scene,
+                scene,
                 sim.snapshots,
                 size=size,
                 theme=theme,
                 gif=not args.no_gif,
                 apng=args.apng,
                 sheet=args.sheet,
+                mp4=args.mp4,
                 workers=args.workers,
                 progress=enabled,
             )
@@ -486,13 +512,16 @@ def _load(
     level_path: Path, theme_option: str | None, level: Level | None = None
 ) -> tuple[Level, Theme, dict[str, Path]]:
     """The level, the theme it runs with (``--theme``, else its own, else light) and the files
-    it names; a bad theme file is a problem of the level, or of ``--theme``.
+    it names (sprites, and its theme when used), by the name the level gives them; a bad theme
+    file is a problem of the level, or of ``--theme``.
     """
     if level is None:
         level = load_level(level_path)
+    # load_level has checked every sprite file: resolving them again cannot fail.
+    named = {name: sprite_file(name, level_path)[0] for _, name in sprite_fields(level)}
     if theme_option is not None:
         with _usage("--theme"):
-            return level, load_theme(theme_option), {}
+            return level, load_theme(theme_option), named
     try:
         own = level_theme(level, level_path)
     except ValueError as exc:
@@ -502,7 +531,8 @@ def _load(
     except ThemeError as exc:
         reason = f"{exc.reason} (the theme of {level_path})"
         raise LevelError([Problem(str(exc.file), exc.line, exc.field, reason)]) from None
-    named = {str(level.level.theme): own} if isinstance(own, Path) else {}
+    if isinstance(own, Path):
+        named[str(level.level.theme)] = own
     return level, theme, named
 
 
@@ -555,6 +585,7 @@ def _results(
         "no_gif": args.no_gif,
         "apng": args.apng,
         "sheet": args.sheet,
+        "mp4": args.mp4,
         "size": f"{size[0]}x{size[1]}",
         "theme": args.theme,
     }
@@ -600,3 +631,156 @@ def _print_summary(console: Console, result: RunResult, out: Path, written: list
     others = [p.name for p in written if p.parent.name != "frames"]
     listed = ([f"frames/ ({frames} PNG)"] if frames else []) + others
     console.print(f"wrote {escape(str(out))}/: {', '.join(listed)}")
+
+
+# -- live commands: a window on a running level, and re-running a level as it is edited ----------
+
+_PLAY_EPILOG = """\
+examples:
+  ikgame play                                 the default level in a 960x540 window
+  ikgame play 12_push_the_ball --solver dls
+  ikgame play my_level.toml --watch           reload the level each time the file is saved
+
+in the window:
+{keys}
+
+The window is drawn by the same renderer as 'ikgame run' frames. The simulation runs at the
+level's tick rate whatever the display's frame rate; without mouse input a level ends exactly as
+'ikgame run' ends it. Needs the play extra: python -m pip install 'ikgame[play]'
+(--watch also the watch extra: python -m pip install 'ikgame[play,watch]').
+"""
+
+_WATCH_EPILOG = """\
+examples:
+  ikgame watch my_level.toml                  results and frames in runs/<level>/
+  ikgame watch my_level.toml --no-frames --out /tmp/try
+
+Runs the level as 'ikgame run' does, then again whenever the level file or a file it names (its
+theme) is saved: the result table or the level's problems are printed, and the outputs are
+rewritten file by file atomically. Ctrl-C stops watching (exit code 0) and leaves the last
+outputs whole. Needs the watch extra: python -m pip install 'ikgame[watch]'
+"""
+
+
+def _live_commands(sub: argparse._SubParsersAction) -> None:
+    from ikgame.app.state import help_lines
+
+    play = sub.add_parser(
+        "play",
+        help="play a level live in a window: drag the target with the mouse",
+        description="Run a level live in a window (pygame-ce) at its tick rate: drag the target "
+        "with the mouse, pause, step, restart, switch solvers, toggle gravity, take screenshots.",
+        epilog=_PLAY_EPILOG.format(
+            keys="\n".join(f"  {keys:<14} {what}" for keys, what in help_lines())
+        ),
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    play.add_argument("level", nargs="?", metavar="LEVEL", help="a level file or shipped name")
+    play.add_argument("--solver", choices=SOLVER_NAMES, help="IK solver to start with")
+    play.add_argument(
+        "--size", default="960x540", metavar="WxH", help="window size in pixels (default: 960x540)"
+    )
+    play.add_argument("--theme", metavar="NAME", help="colour theme (default: the level's own)")
+    play.add_argument(
+        "--out", metavar="DIR", type=Path, help="screenshot folder (default: runs/<level>)"
+    )
+    play.add_argument("--watch", action="store_true", help="reload the level when its file changes")
+    play.add_argument("--debug", action="store_true", help="show tracebacks of internal errors")
+    play.set_defaults(handler=_cmd_play)
+
+    watch = sub.add_parser(
+        "watch",
+        help="re-run a level whenever its file changes",
+        description="Run a level, then run it again each time its file (or a file it names) "
+        "changes, printing the results or the level's problems.",
+        epilog=_WATCH_EPILOG,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    watch.add_argument("level", metavar="LEVEL", help="a level file or shipped name")
+    _output_options(watch, "output folder (default: runs/<level>)")
+    watch.add_argument("--solver", choices=SOLVER_NAMES, help="IK solver, as for run")
+    watch.add_argument("--no-frames", action="store_true", help="write results only, no pictures")
+    watch.set_defaults(handler=_cmd_watch)
+
+
+def _extra(module: str, extra: str, purpose: str) -> None:
+    from ikgame.app._extras import MissingExtra, require
+
+    try:
+        require(module, extra, purpose)
+    except MissingExtra as exc:
+        raise UsageError(str(exc)) from None
+
+
+def _cmd_play(args: argparse.Namespace) -> int:
+    _extra("pygame", "play", "ikgame play")
+    if args.watch:
+        _extra("watchfiles", "watch", "ikgame play --watch")
+    from ikgame.app.state import PlayState
+    from ikgame.app.window import NoDisplay, play
+
+    with _usage("--size"):
+        size = parse_size(args.size)
+    theme = None
+    if args.theme is not None:
+        with _usage("--theme"):
+            theme = load_theme(args.theme)
+    state = PlayState(resolve_level(args.level), solver=args.solver, size=size, theme=theme)
+    state.out_dir = (
+        args.out if args.out is not None else Path("runs") / _slug(state.level.level.name)
+    )
+    try:
+        play(state, watch=args.watch)
+    except NoDisplay as exc:
+        raise UsageError(f"cannot open a window: {exc}; ikgame play needs a desktop") from None
+    return EXIT_OK
+
+
+def _cmd_watch(
+    args: argparse.Namespace,
+    *,
+    stop: threading.Event | None = None,
+    ready: Callable[[], None] | None = None,
+) -> int:
+    """``stop`` and ``ready`` let a caller other than the terminal end the watch and know when
+    it is in place (see :func:`ikgame.app.watch.watch_level`)."""
+    _extra("watchfiles", "watch", "ikgame watch")
+    from ikgame.app.watch import level_files, watch_level
+
+    level_path = resolve_level(args.level)
+    # Every run goes through the run command itself: same checks, outputs, messages and table.
+    argv = ["run", str(level_path)]
+    for option, value in (("--out", args.out), ("--solver", args.solver)):
+        if value is not None:
+            argv += [option, str(value)]
+    flags = {"--no-frames": args.no_frames, "--quiet": args.quiet, "--debug": args.debug}
+    argv += [flag for flag, on in flags.items() if on]
+    forced = args.force
+
+    def run() -> int:
+        nonlocal forced
+        code = main([*argv, "--force"] if forced else argv)
+        # Once written, the folder holds this watch's own outputs: rewrite them on each change.
+        forced = forced or code == EXIT_OK
+        return code
+
+    console = _console(quiet=args.quiet)
+
+    def again() -> None:
+        console.print(f"\n[bold]{escape(level_path.name)}[/] changed: running it again")
+        if run() == EXIT_INTERRUPTED:
+            raise KeyboardInterrupt
+
+    try:
+        code = run()
+        if code == EXIT_INTERRUPTED:
+            raise KeyboardInterrupt
+        if code != EXIT_OK and not validate_files([level_path]):
+            return code  # the options are wrong, not the level: no edit to it can help
+        names = ", ".join(escape(str(path)) for path in sorted(level_files(level_path)))
+        console.print(f"watching {names} for changes (Ctrl-C stops)")
+        watch_level(level_path, again, stop=stop, ready=ready)
+    except KeyboardInterrupt:
+        # Every file is written atomically: what is on disk now is whole.
+        console.print("stopped watching")
+    return EXIT_OK

@@ -14,12 +14,16 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Literal
 
 import numpy as np
 
+from ikgame.control.blockage import BlockWatch
 from ikgame.control.controller import Controller
+from ikgame.control.dynamics import ChainInertia
+from ikgame.control.servo import Servo
+from ikgame.kinematics import SolveStatus
 from ikgame.level.model import (
     MAX_COORD,
     BallProp,
@@ -50,7 +54,10 @@ class TickInfo:
     Attributes:
         tick: ticks done, including this one.
         time: simulated time at the end of the tick, s.
-        solver_status: ``"success"``, ``"processing"`` or ``"failure"`` (the CCD article's states).
+        solver_status: ``"success"``, ``"processing"`` or ``"failure"`` (the CCD article's
+            states), or ``"blocked"``: the solver reaches the target but the chain, pushing
+            against something or at its torque limits, makes no progress toward it, so it holds
+            its pose until the target moves (see :mod:`ikgame.control.blockage`).
         iterations: solver iterations used this tick.
         error: end-effector distance to the target after the tick, px (nan without a target).
         torque_limited: (n,) which motors hit their torque limit this tick.
@@ -133,6 +140,17 @@ class Simulation:
     def __init__(self, level: Level, *, solver: str | None = None, record: bool = True) -> None:
         self.level = level
         self.world = World(level)
+        inertia = ChainInertia(
+            np.array([link.length for link in level.chain.expanded_links]),
+            self.world.link_masses,
+            self.world.link_moments,
+        )
+        servo = Servo(
+            inertia,
+            max_torque=self.world.max_torque,
+            max_speed=self.world.max_speed,
+            gain=level.chain.gain,
+        )
         self.controller = Controller(
             self.world.skeleton,
             solver or level.chain.solver,
@@ -140,6 +158,7 @@ class Simulation:
             gain=level.chain.gain,
             iterations=level.chain.iterations,
             arrival=level.chain.arrival,
+            servo=servo,
         )
         self._solver_pinned = solver is not None
         self._start_solver = self.controller.solver_name
@@ -159,6 +178,9 @@ class Simulation:
         self._result: RunResult | None = None
         self.scene = _scene(level, self.world, self.script)
         self._has_goals = bool(level.goals)
+        self._watch = BlockWatch(dt=self.dt, arrival=level.chain.arrival)
+        self._blocked_target: np.ndarray | None = None
+        self._blocked_in_step = False
         if self._has_goals:
             self.goals.observe(0.0, self.world.prop_states())
 
@@ -207,32 +229,87 @@ class Simulation:
             self.snapshots.append(self.snapshot())
         if self.script.pending:
             self._apply(self.script.take_changes())
+        info = self._tick()
+        if info is None:
+            return self._last
+        finished = len(self.script.outcomes)
+        self.script.observe(self.time, self.dt, self.world.end_effector())
+        self._note_blocked(finished)
+        if self._has_goals:
+            self.goals.observe(self.time, self.world.prop_states())
+        self._last = info
+        return info
+
+    def play_on(self) -> TickInfo:
+        """One tick of control and physics toward :attr:`target` after the run is over.
+
+        For a live window that lets the chain follow the mouse once the level has ended: the
+        script, the goals and the recorded frames stay as they ended, and :attr:`result` with
+        them (the clock does not move on either).
+        """
+        if self.diverged:
+            return self._last
+        info = self._tick(count=False)
+        return self._last if info is None else info
+
+    def _tick(self, *, count: bool = True) -> TickInfo | None:
+        """Target, solve, command the motors, step the world, watch for a jam; None if the
+        physics blew up."""
         target = self.target
-        command = self.controller.command(self.world.joint_angles(), target)
-        self.world.set_rates(command.rates)
+        self._release_if_moved(target)
+        command = self.controller.command(
+            self.world.joint_angles(),
+            target,
+            velocities=self.world.joint_velocities(),
+            gravity=self.world.gravity,
+            dt=self.dt,
+        )
+        drive = command.drive
+        self.world.drive(drive.rates, drive.torques, drive.forces, drive.budgets)
         self.world.step(self.dt)
-        self.tick += 1
+        self.tick += count
         if self.world.diverged():
             self.diverged = True
             self._divergence = f"{self.world.divergence()} blew up at tick {self.tick}"
-            return self._last
+            return None
         if self.world.skeleton is not self.controller.skeleton:
             # The base moved: the solver must work from where it is now.
             self.controller.skeleton = self.world.skeleton
         effector = self.world.end_effector()
         error = math.nan if target is None else float(np.hypot(*(effector - target)))
-        self.script.observe(self.time, self.dt, effector)
-        if self._has_goals:
-            self.goals.observe(self.time, self.world.prop_states())
-        self._last = TickInfo(
-            self.tick,
-            self.time,
-            command.solution.status.value,
-            command.solution.iterations,
-            error,
-            self.world.torque_limited(),
-        )
-        return self._last
+        limited = self.world.torque_limited()
+        status = command.solution.status.value
+        if target is not None and self._blocked_target is None:
+            reachable = command.solution.status is not SolveStatus.FAILURE
+            pushing = bool(limited.any()) or (reachable and self.world.touching())
+            if self._watch.observe(error=error, reachable=reachable, pushing=pushing):
+                self._blocked_target = target.copy()
+                self.controller.hold(self.world.joint_angles())
+        if self._blocked_target is not None:
+            status = "blocked"
+        return TickInfo(self.tick, self.time, status, command.solution.iterations, error, limited)
+
+    def _note_blocked(self, finished: int) -> None:
+        """Mark the steps that ended while the chain was blocked, in their outcome's note."""
+        if self._blocked_target is not None:
+            self._blocked_in_step = True
+        outcomes = self.script.outcomes
+        if len(outcomes) > finished and self._blocked_in_step:
+            last = outcomes[finished]
+            note = "blocked" if not last.note else f"{last.note}, blocked"
+            outcomes[finished] = replace(last, note=note)
+        if len(outcomes) > finished:
+            self._blocked_in_step = False
+
+    def _release_if_moved(self, target: np.ndarray | None) -> None:
+        """A blocked chain tries again once its target has moved (or is handed back)."""
+        blocked = self._blocked_target
+        if blocked is None:
+            return
+        if target is None or np.hypot(*(target - blocked)) > self.controller.arrival:
+            self._blocked_target = None
+            self._watch.reset()
+            self.controller.release()
 
     def run(self, progress: Callable[[float], None] | None = None) -> RunResult:
         """Step until :attr:`done`; ``progress(fraction)`` is called now and then. Returns the result."""
@@ -263,7 +340,10 @@ class Simulation:
         if self._result is not None:
             return self._result
         if self.done:
-            outcomes = tuple(self.script.finish(self.time))
+            finished = len(self.script.outcomes)
+            self.script.finish(self.time)
+            self._note_blocked(finished)
+            outcomes = tuple(self.script.outcomes)
             goals = self.goals.finish(self.time, self.world.prop_states())
         else:
             outcomes, goals = tuple(self.script.outcomes), ()

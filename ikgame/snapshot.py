@@ -11,7 +11,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["Scene", "Snapshot", "PropShape"]
+__all__ = ["Scene", "Snapshot", "PropShape", "Sprite"]
 
 
 @dataclass(frozen=True)
@@ -25,6 +25,34 @@ class PropShape:
 
     kind: str
     size: tuple[float, float]
+
+
+@dataclass(frozen=True, eq=False)
+class Sprite:
+    """An image drawn on a link or a prop in place of its shape, decoded once per run.
+
+    The image's +x axis (to the right) points along the link, or along the prop's angle; the
+    image is drawn upright, not mirrored, when that direction is the world's +x.
+
+    >>> Sprite(np.zeros((4, 8, 4), dtype=np.uint8), (0.0, 2.0), 2.5).size
+    (8, 4)
+
+    Attributes:
+        rgba: (height, width, 4) uint8 pixels with straight (not premultiplied) alpha, rows
+            from the top.
+        pivot: the image point (x right, y down, image px from the top-left corner) that sits
+            on the link's joint or the prop's centre.
+        scale: world px per image px.
+    """
+
+    rgba: np.ndarray
+    pivot: tuple[float, float]
+    scale: float
+
+    @property
+    def size(self) -> tuple[int, int]:
+        """(width, height) of the image, px."""
+        return int(self.rgba.shape[1]), int(self.rgba.shape[0])
 
 
 @dataclass(frozen=True, eq=False)
@@ -47,6 +75,9 @@ class Scene:
         bounds: explicit camera bounds ``(xmin, ymin, xmax, ymax)`` from the level, or None.
         step_count: number of script steps.
         fps: recorded frames per second.
+        link_sprites: one entry per link (None: drawn as a capsule), or empty when no link has
+            a sprite.
+        prop_sprites: one entry per prop (None: drawn as its shape), or empty.
     """
 
     level_name: str
@@ -60,6 +91,8 @@ class Scene:
     bounds: tuple[float, float, float, float] | None = None
     step_count: int = 0
     fps: float = 30.0
+    link_sprites: tuple[Sprite | None, ...] = ()
+    prop_sprites: tuple[Sprite | None, ...] = ()
 
 
 @dataclass(frozen=True, eq=False)
@@ -79,7 +112,9 @@ class Snapshot:
         target: (2,) the current target, or None when the script has none.
         step_index: index of the running script step (== step_count once the script is done).
         error: distance from the end effector to the target, px (nan without a target).
-        solver_status: the solver's state this tick: ``"success"``, ``"processing"``, ``"failure"``.
+        solver_status: the solver's state this tick: ``"success"``, ``"processing"``,
+            ``"failure"``, or ``"blocked"`` (the chain makes no progress toward a target the
+            solver reaches, so it holds its pose).
         torque_limited: (n,) which motors are at their torque limit.
         props: (p, 3) each prop's ``(x, y, angle)``.
     """

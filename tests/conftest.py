@@ -1,8 +1,12 @@
-"""Shared test helpers: small levels built in code."""
+"""Shared test helpers: small levels built in code, a video probe, and a level file for the
+live tools."""
 
 from __future__ import annotations
 
 import copy
+import re
+import subprocess
+from pathlib import Path
 
 import pytest
 
@@ -36,3 +40,77 @@ def make_level():
         return Level.model_validate(_merge(_BASE, changes))
 
     return make
+
+
+@pytest.fixture
+def probe_video():
+    """``probe_video(path)``: what ffprobe would say of a video (codec, pixel format, size, fps,
+    frame count), read from the stream line of ``ffmpeg -i`` and a full decode, with the ffmpeg
+    that imageio-ffmpeg ships; the test is skipped without the video extra."""
+    imageio_ffmpeg = pytest.importorskip(
+        "imageio_ffmpeg", reason="MP4 export needs the video extra: ikgame[video]"
+    )
+
+    def probe(path: Path) -> dict[str, object]:
+        proc = subprocess.run(
+            [imageio_ffmpeg.get_ffmpeg_exe(), "-hide_banner", "-i", str(path)],
+            capture_output=True,
+            text=True,
+        )
+        stream = next(line for line in proc.stderr.splitlines() if "Video:" in line)
+        size = re.search(r", (\d+)x(\d+)", stream)
+        frames, _ = imageio_ffmpeg.count_frames_and_secs(str(path))
+        return {
+            "codec": stream.split("Video: ")[1].split()[0],
+            "pix_fmt": re.search(r"(yuv\w+)", stream).group(1),
+            "size": (int(size.group(1)), int(size.group(2))),
+            "fps": float(re.search(r"([\d.]+) fps", stream).group(1)),
+            "frames": frames,
+        }
+
+    return probe
+
+
+LIVE_LEVEL = """\
+[level]
+name = "{name}"
+duration = 3.0
+
+[world]
+gravity = [0.0, -900.0]
+tick_rate = 240
+fps = 30
+
+[chain]
+base = [0.0, 0.0]
+angle = 90.0
+
+[[chain.links]]
+length = 100.0
+mass = 1.0
+limits = [-150.0, 150.0]
+max_torque = 4.0e6
+repeat = 2
+
+[[script]]
+reach = [120.0, 100.0]
+
+[[script]]
+reach = [-80.0, 140.0]
+"""
+
+
+@pytest.fixture
+def level_text():
+    """``level_text(name)``: the TOML of a two-link level of at most 3 s called ``name``."""
+    return lambda name="Live": LIVE_LEVEL.format(name=name)
+
+
+@pytest.fixture
+def level_file(tmp_path: Path, level_text) -> Path:
+    """A two-link level of at most 3 s in its own folder."""
+    folder = tmp_path / "levels"
+    folder.mkdir()
+    path = folder / "live.toml"
+    path.write_text(level_text())
+    return path

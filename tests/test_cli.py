@@ -347,3 +347,81 @@ def test_a_full_disk_during_the_export_exits_2_and_says_so(tmp_path, capsys, mon
     err = capsys.readouterr().err
     assert "cannot write" in err and "run.gif: No space left on device" in err
     assert not (tmp_path / "out" / "results.json").exists()
+
+
+# -- sprites and MP4 -----------------------------------------------------------------------------
+
+
+def test_run_mp4_of_the_hero_level_is_h264_with_every_frame(tmp_path, probe_video):
+    out = tmp_path / "run"
+    args = ["run", "12_push_the_ball", "--quiet", "--mp4", "--no-gif", "--size", "321x181"]
+    assert main([*args, "--out", str(out)]) == 0
+    frames = len(list((out / "frames").glob("*.png")))
+    assert frames > 100
+    # An odd side loses its last pixel: H.264 in yuv420p needs even sides.
+    assert probe_video(out / "run.mp4") == {
+        "codec": "h264",
+        "pix_fmt": "yuv420p",
+        "size": (320, 180),
+        "fps": 30.0,
+        "frames": frames,
+    }
+    assert sorted(p.name for p in out.iterdir()) == [
+        "frames",
+        "motion.json",
+        "results.json",
+        "run.mp4",
+    ]
+
+
+def test_mp4_without_the_video_extra_exits_2_with_the_install_command_before_running(
+    tmp_path, capsys, monkeypatch
+):
+    import importlib.util
+
+    from ikgame.render import video
+    from ikgame.sim import Simulation
+
+    real = importlib.util.find_spec
+    monkeypatch.setattr(
+        video.importlib.util,
+        "find_spec",
+        lambda name, *a: None if name == "imageio_ffmpeg" else real(name, *a),
+    )
+    monkeypatch.setattr(Simulation, "run", lambda *a, **k: pytest.fail("simulated anyway"))
+    out = tmp_path / "out"
+    assert main(["run", "--mp4", "--out", str(out)]) == 2
+    assert (
+        "--mp4: MP4 export needs the video extra (imageio-ffmpeg): python -m pip install "
+        "'ikgame[video]'" in capsys.readouterr().err
+    )
+    assert not out.exists()
+    assert main(["run", "--mp4", "--no-frames", "--out", str(out)]) == 2
+    assert "--mp4: there are no pictures to encode with --no-frames" in capsys.readouterr().err
+
+
+def test_a_missing_sprite_exits_2_naming_its_line_in_run_and_validate(tmp_path, capsys):
+    level = tmp_path / "skinned.toml"
+    level.write_text(
+        (ROOT / "levels" / "14_skinned_arm.toml")
+        .read_text()
+        .replace("sprites/forearm.png", "sprites/nope.png")
+    )
+    out = tmp_path / "out"
+    assert main(["run", str(level), "--out", str(out)]) == 2
+    line = level.read_text().splitlines().index('sprite = "sprites/nope.png"') + 1
+    expected = f"{level}:{line}: chain.links[1].sprite: no file 'sprites/nope.png' in the level's"
+    assert expected in capsys.readouterr().err
+    assert not out.exists()
+    assert main(["validate", str(level)]) == 2
+    assert expected in capsys.readouterr().err
+
+
+def test_a_skinned_level_gives_the_same_frames_serial_and_in_workers(tmp_path):
+    for name, workers in (("a", "1"), ("b", "2")):
+        args = ["run", "14_skinned_arm", "--quiet", "--no-gif", "--size", "96x54"]
+        assert main([*args, "--workers", workers, "--out", str(tmp_path / name)]) == 0
+    a = sorted((tmp_path / "a/frames").iterdir())
+    b = sorted((tmp_path / "b/frames").iterdir())
+    assert len(a) == len(b) > 100
+    assert all(x.read_bytes() == y.read_bytes() for x, y in zip(a, b, strict=True))

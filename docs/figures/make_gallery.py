@@ -14,18 +14,22 @@ from ikgame.level.library import LEVELS_DIR
 from ikgame.level.loader import load_level
 from ikgame.render.export import export_run
 from ikgame.sim import Simulation
+from ikgame.skins import skin_scene
 
 HERE = Path(__file__).resolve().parent
 ANIMATED = "12_push_the_ball"
-SHEETS = ("02_tentacle", "07_figure_eight", "10_moving_base", "13_conductor")
+SHEETS = ("02_tentacle", "07_figure_eight", "10_moving_base", "13_conductor", "14_skinned_arm")
 SIZE = (400, 225)  # px: small enough for a README, large enough to read
 
 
 def _export(name: str, **options: bool) -> Path:
-    sim = Simulation(load_level(LEVELS_DIR / f"{name}.toml"))
+    path = LEVELS_DIR / f"{name}.toml"
+    level = load_level(path)
+    sim = Simulation(level)
     sim.run()
     out = Path(tempfile.mkdtemp()) / name
-    export_run(out, sim.scene, sim.snapshots, size=SIZE, frames=False, motion=False, **options)
+    scene = skin_scene(sim.scene, level, path)
+    export_run(out, scene, sim.snapshots, size=SIZE, frames=False, motion=False, **options)
     return out
 
 

@@ -1,24 +1,33 @@
-"""Per-tick joint control: IK solver -> desired angles -> motor rates.
+"""Per-tick joint control: IK solver -> desired angles -> motor commands.
 
 Each tick the solver is warm-started from the measured pose and returns desired local angles
-within the joint limits. Each motor is then asked for a relative angular velocity proportional to
-its angle error (``gain``, 1/s), clamped by the joint's speed limit (rad/s). The motor's torque
-limit is its ``max_force`` in the world, so a weak joint simply falls behind.
+within the joint limits. Given a :class:`~ikgame.control.servo.Servo` (as the physics world's
+chain is), the angle errors become velocities the motors can brake from in time and feed-forward
+torques within the limits; without one (a chain with no dynamics), each joint is simply asked
+for a relative angular velocity proportional to its error (``gain``, 1/s), clamped by its speed
+limit (rad/s).
 
-Because the gain is in 1/s and the motor holds a velocity, the pose approaches the desired one
-with time constant ``1 / gain`` seconds whatever the tick rate.
+Because the gain is in 1/s, the pose approaches the desired one with time constant ``1 / gain``
+seconds (where the motors have torque to spare) whatever the tick rate.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Final
 
 import numpy as np
 
+from ikgame.control.servo import Servo, ServoCommand
 from ikgame.kinematics import Skeleton, Solution, SolveStatus, get_solver, wrap_angle
+from ikgame.kinematics.jacobian import jacobian
 
 __all__ = ["Command", "Controller", "joint_error"]
+
+JUMP: Final = 4.0
+"""A target whose motion would need joint rates over this many times their speed limits has
+jumped rather than moved."""
 
 
 def joint_error(desired: np.ndarray, measured: np.ndarray, limited: np.ndarray) -> np.ndarray:
@@ -43,10 +52,12 @@ class Command:
     Attributes:
         solution: the solver's desired angles, status, iterations and kinematic error.
         rates: (n,) commanded relative angular velocity per joint (child - parent), rad/s.
+        drive: the servo's feed-forward loads and motor budgets, when the controller has one.
     """
 
     solution: Solution
     rates: np.ndarray
+    drive: ServoCommand | None = None
 
 
 class Controller:
@@ -66,30 +77,96 @@ class Controller:
         gain: float = 12.0,
         iterations: int = 10,
         arrival: float = 0.5,
+        servo: Servo | None = None,
     ) -> None:
-        if not (math.isfinite(gain) and gain > 0):
-            raise ValueError(f"gain must be a positive number (1/s), got {gain!r}")
         self.skeleton = skeleton
         self.solver_name = solver
         self.solve = get_solver(solver)
         self.max_speed = np.asarray(max_speed, dtype=float)
-        self.gain = float(gain)
+        self.servo = servo
+        self.gain = gain
         self.iterations = int(iterations)
         self.arrival = float(arrival)
         self._limited = skeleton.limited
         self._held: np.ndarray | None = None
+        self._holding = False
+        self._last_target: np.ndarray | None = None
+
+    @property
+    def gain(self) -> float:
+        """Servo gain, 1/s."""
+        return self._gain
+
+    @gain.setter
+    def gain(self, value: float) -> None:
+        if not (math.isfinite(value) and value > 0):
+            raise ValueError(f"gain must be a positive number (1/s), got {value!r}")
+        self._gain = float(value)
+        if self.servo is not None:
+            self.servo.gain = self._gain
 
     def set_solver(self, name: str) -> None:
         """Switch solver from the next tick on (``ccd``, ``jacobian_transpose``, ``dls``, ``fabrik``)."""
         self.solve = get_solver(name)
         self.solver_name = name
 
-    def command(self, measured: np.ndarray, target: np.ndarray | None) -> Command:
-        """Motor rates toward ``target`` (px) from the ``measured`` local angles (radians).
+    def _goal_rates(
+        self, measured: np.ndarray, target: np.ndarray | None, dt: float
+    ) -> np.ndarray | None:
+        """Joint rates (rad/s) that carry the end effector along with a moving target.
 
-        With no target the chain holds the last pose it was asked for (or its current one).
+        The least-norm rates for the target's velocity (a damped pseudo-inverse of the
+        Jacobian), so the chain moves with the target and the servo only closes the error on
+        top, instead of lagging behind; rates beyond a joint's speed limit are scaled down
+        together, keeping the direction. Rates over ``JUMP`` times the limit mean the target
+        jumped (a new reach step): a new goal to brake toward, not a motion to follow.
         """
-        if target is None:
+        previous, self._last_target = self._last_target, target
+        if target is None or previous is None:
+            return None
+        velocity = (target - previous) / dt
+        if not np.any(velocity):
+            return None
+        arms = jacobian(self.skeleton, measured)
+        damping = (0.01 * self.skeleton.reach) ** 2
+        rates = arms.T @ np.linalg.solve(arms @ arms.T + damping * np.eye(2), velocity)
+        over = float(np.max(np.abs(rates) / self.max_speed))
+        if over > JUMP:
+            return None
+        return rates / max(over, 1.0)
+
+    def hold(self, measured: np.ndarray) -> None:
+        """Stop pushing: hold the ``measured`` pose (radians) instead of solving, until
+        :meth:`release`. The response to a blocked chain: pressing on against an obstacle or a
+        stalled motor only grinds."""
+        self._held = self.skeleton.clamp(np.asarray(measured, dtype=float).copy())
+        self._holding = True
+
+    def release(self) -> None:
+        """Solve toward the target again after :meth:`hold`."""
+        self._holding = False
+
+    @property
+    def holding(self) -> bool:
+        """True between :meth:`hold` and :meth:`release`."""
+        return self._holding
+
+    def command(
+        self,
+        measured: np.ndarray,
+        target: np.ndarray | None,
+        *,
+        velocities: np.ndarray | None = None,
+        gravity: tuple[float, float] | np.ndarray = (0.0, 0.0),
+        dt: float | None = None,
+    ) -> Command:
+        """Motor commands toward ``target`` (px) from the ``measured`` local angles (radians).
+
+        With a servo, ``velocities`` (rad/s, child - parent), ``gravity`` (px/s^2) and the tick
+        ``dt`` (s) are needed too. With no target the chain holds the last pose it was asked
+        for (or its current one).
+        """
+        if target is None or self._holding:
             if self._held is None:
                 self._held = self.skeleton.clamp(measured.copy())
             solution = Solution(self._held, SolveStatus.SUCCESS, 0, 0.0)
@@ -104,5 +181,13 @@ class Controller:
             )
             self._held = solution.angles
         error = joint_error(solution.angles, measured, self._limited)
-        rates = np.clip(self.gain * error, -self.max_speed, self.max_speed)
-        return Command(solution, rates)
+        if self.servo is None:
+            rates = np.clip(self.gain * error, -self.max_speed, self.max_speed)
+            return Command(solution, rates)
+        if velocities is None or dt is None:
+            raise ValueError("a controller with a servo needs the joint velocities and dt")
+        world_angles = np.cumsum(measured) + self.skeleton.base_angle
+        drive = self.servo.command(
+            error, world_angles, velocities, gravity, dt, self._goal_rates(measured, target, dt)
+        )
+        return Command(solution, drive.rates, drive)

@@ -3,15 +3,19 @@
 Every problem is reported with the file, the line where it can be found, the field's path and
 what was expected, so a level designer never has to read a traceback.
 
-TOML is data: nothing in a level runs code. The only files a level may name (its ``theme``) must
-resolve, symlinks followed, inside the level's own folder or ``assets/``
-(:func:`resolve_level_file`).
+TOML is data: nothing in a level runs code. The only files a level may name (its ``theme``, its
+links' and props' ``sprite`` images) must resolve, symlinks followed, inside the level's own folder
+or ``assets/`` (:func:`resolve_level_file`). Sprite images are checked here without being decoded
+(this layer does not import Pillow): a PNG's structure, every chunk's checksum and its size in
+pixels (:func:`sprite_file`); the renderer decodes them (:mod:`ikgame.skins`).
 """
 
 from __future__ import annotations
 
 import re
+import struct
 import tomllib
+import zlib
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Final
@@ -28,13 +32,30 @@ __all__ = [
     "parse_level",
     "resolve_level_file",
     "level_theme",
+    "sprite_file",
+    "sprite_fields",
+    "problem_at",
     "MAX_FILE_BYTES",
+    "MAX_ASSET_BYTES",
+    "MAX_SPRITE_BYTES",
+    "MAX_SPRITE_SIDE",
+    "MAX_SPRITE_PIXELS",
+    "MAX_SPRITE_TOTAL_PIXELS",
 ]
 
 MAX_FILE_BYTES: Final = 1_000_000
 """A level is a few kilobytes; anything this large is a mistake or an attack."""
 MAX_ASSET_BYTES: Final = 1_000_000
-"""Largest file a level may name (a theme is a few hundred bytes)."""
+"""Largest theme file a level may name (a theme is a few hundred bytes)."""
+MAX_SPRITE_BYTES: Final = 2_000_000
+"""Largest sprite image file."""
+MAX_SPRITE_SIDE: Final = 2048
+"""Largest width or height of a sprite image, px."""
+MAX_SPRITE_PIXELS: Final = 1024 * 1024
+"""Pixels in one sprite image (decoded, each takes 4 bytes)."""
+MAX_SPRITE_TOTAL_PIXELS: Final = 8 * 1024 * 1024
+"""Pixels of a level's distinct sprite images together: bounds the memory a level's art takes."""
+_PNG_SIGNATURE: Final = b"\x89PNG\r\n\x1a\n"
 MAX_KEY_PARTS: Final = 8
 """Parts of one dotted key or table header (``a.b.c`` has 3); the format needs 3 at most."""
 MAX_NESTING: Final = 8
@@ -128,12 +149,138 @@ def load_level(path: str | Path) -> Level:
         except ValueError as exc:
             line = _Locator(text)(("level", "theme"))
             raise LevelError([Problem(name, line, "level.theme", str(exc))]) from None
+    problems = _sprite_problems(level, path, text)
+    if problems:
+        raise LevelError(problems)
     return level
 
 
-def resolve_level_file(name: str, level_file: str | Path) -> Path:
+def sprite_fields(level: Level) -> list[tuple[tuple[str | int, ...], str]]:
+    """Every sprite a level names, as (field location, file name), links first.
+
+    >>> from ikgame.level.library import LEVELS_DIR
+    >>> sprite_fields(load_level(LEVELS_DIR / "14_skinned_arm.toml"))[0]
+    (('chain', 'links', 0, 'sprite'), 'sprites/upper_arm.png')
+    """
+    fields: list[tuple[tuple[str | int, ...], str]] = []
+    for i, link in enumerate(level.chain.links):
+        if link.sprite is not None:
+            fields.append((("chain", "links", i, "sprite"), link.sprite))
+    for i, prop in enumerate(level.props):
+        if prop.sprite is not None:
+            fields.append((("props", i, "sprite"), prop.sprite))
+    return fields
+
+
+def sprite_file(name: str, level_file: str | Path) -> tuple[Path, tuple[int, int]]:
+    """The real path of a sprite image a level names and its size (width, height) in px.
+
+    ``ValueError`` when :func:`resolve_level_file` refuses it, when it is not a whole PNG file
+    (signature, chunk lengths and checksums, IHDR first, IEND last), or when it is larger than
+    ``MAX_SPRITE_SIDE`` px a side or ``MAX_SPRITE_PIXELS`` pixels.
+
+    >>> from ikgame.level.library import LEVELS_DIR
+    >>> sprite_file("sprites/ball.png", LEVELS_DIR / "14_skinned_arm.toml")[1]
+    (96, 96)
+    """
+    path = resolve_level_file(name, level_file, MAX_SPRITE_BYTES)
+    try:
+        data = path.read_bytes()
+    except OSError as exc:
+        raise ValueError(f"{name!r} cannot be read ({exc.strerror})") from None
+    width, height = _png_size(data, name)
+    if not (
+        0 < width <= MAX_SPRITE_SIDE
+        and 0 < height <= MAX_SPRITE_SIDE
+        and width * height <= MAX_SPRITE_PIXELS
+    ):
+        raise ValueError(
+            f"{name!r} is {width}x{height} px; a sprite is at most {MAX_SPRITE_SIDE} px a side "
+            f"and {MAX_SPRITE_PIXELS:,} pixels"
+        )
+    return path, (width, height)
+
+
+def _png_size(data: bytes, name: str) -> tuple[int, int]:
+    """Width and height of PNG ``data`` once its chunk structure checks out."""
+    if not data.startswith(_PNG_SIGNATURE):
+        raise ValueError(f"{name!r} is not a PNG image")
+    chunks: list[bytes] = []
+    pos = len(_PNG_SIGNATURE)
+    while pos < len(data) and (not chunks or chunks[-1] != b"IEND"):
+        if pos + 12 > len(data):
+            raise ValueError(f"{name!r} is cut short (a damaged PNG)")
+        length, kind = struct.unpack(">I4s", data[pos : pos + 8])
+        end = pos + 12 + length
+        if end > len(data):
+            raise ValueError(f"{name!r} is cut short (a damaged PNG)")
+        (crc,) = struct.unpack(">I", data[end - 4 : end])
+        if zlib.crc32(data[pos + 4 : end - 4]) != crc:
+            raise ValueError(f"{name!r} is damaged (a PNG chunk fails its checksum)")
+        chunks.append(kind)
+        pos = end
+    if not chunks or chunks[0] != b"IHDR" or b"IDAT" not in chunks or chunks[-1] != b"IEND":
+        raise ValueError(f"{name!r} is not a whole PNG image (IHDR, IDAT or IEND missing)")
+    width, height = struct.unpack(">II", data[16:24])
+    return width, height
+
+
+def _sprite_problems(level: Level, level_file: Path, text: str) -> list[Problem]:
+    """Every sprite that cannot be used, and the pixel budget of them all."""
+    fields = sprite_fields(level)
+    if not fields:
+        return []
+    locate = _Locator(text)
+    problems = []
+    # Each file is read once, however many links name it: a level may name 300 sprites.
+    checked: dict[str, tuple[Path, int] | str] = {}
+    for loc, name in fields:
+        if name not in checked:
+            try:
+                path, (width, height) = sprite_file(name, level_file)
+                checked[name] = (path, width * height)
+            except ValueError as exc:
+                checked[name] = str(exc)
+        result = checked[name]
+        if isinstance(result, str):
+            where = locate(loc)
+            problems.append(Problem(str(level_file), where, _field_path(loc), result))
+    sizes = dict(r for r in checked.values() if not isinstance(r, str))
+    if not problems and sum(sizes.values()) > MAX_SPRITE_TOTAL_PIXELS:
+        loc = fields[-1][0]
+        problems.append(
+            Problem(
+                str(level_file),
+                locate(loc),
+                _field_path(loc),
+                f"the level's sprite images hold {sum(sizes.values()):,} pixels together; "
+                f"at most {MAX_SPRITE_TOTAL_PIXELS:,}",
+            )
+        )
+    return problems
+
+
+def problem_at(level_file: str | Path, loc: tuple[str | int, ...], message: str) -> Problem:
+    """A problem found after loading, at the field ``loc`` of ``level_file`` (its line looked up
+    in the file as it is now).
+
+    >>> from ikgame.level.library import DEFAULT_LEVEL
+    >>> str(problem_at(DEFAULT_LEVEL, ("chain", "solver"), "no"))  # doctest: +ELLIPSIS
+    '...01_first_reach.toml:...: chain.solver: no'
+    """
+    try:
+        with open(level_file, "rb") as handle:
+            text = handle.read(MAX_FILE_BYTES).decode("utf-8", errors="replace")
+        line = _Locator(text)(loc)
+    except OSError:
+        line = None
+    return Problem(str(level_file), line, _field_path(loc), message)
+
+
+def resolve_level_file(name: str, level_file: str | Path, max_bytes: int = MAX_ASSET_BYTES) -> Path:
     """The real path of a file a level names: looked up in the level's folder, then in
-    ``assets/``; ``ValueError`` when it is missing, too large, or a symlink leads out of both.
+    ``assets/``; ``ValueError`` when it is missing, larger than ``max_bytes``, or a symlink leads
+    out of both.
 
     ``name`` has passed :func:`~ikgame.level.model.check_relative_file` (no absolute path, no
     ``..``); resolving catches the symlinks.
@@ -154,8 +301,8 @@ def resolve_level_file(name: str, level_file: str | Path) -> Path:
             )
         if not real.is_file():
             raise ValueError(f"{name!r} is not a file")
-        if real.stat().st_size > MAX_ASSET_BYTES:
-            raise ValueError(f"{name!r} is larger than {MAX_ASSET_BYTES} bytes")
+        if real.stat().st_size > max_bytes:
+            raise ValueError(f"{name!r} is larger than {max_bytes:,} bytes")
         return real
     raise ValueError(f"no file {name!r} in the level's folder or assets/")
 

@@ -13,9 +13,10 @@ from __future__ import annotations
 
 import math
 import re
-from typing import Annotated, Final, Literal, get_args
+from typing import Annotated, Any, Final, Literal, get_args
 
 from pydantic import (
+    AfterValidator,
     BaseModel,
     ConfigDict,
     Discriminator,
@@ -107,6 +108,8 @@ _TEXT_PATTERN: Final = r"^[^\x00-\x09\x0b-\x1f\x7f]*$"
 _THEME_NAME: Final = re.compile(r"^[A-Za-z0-9_-]+$")
 
 Coord = Annotated[float, Field(ge=-MAX_COORD, le=MAX_COORD, allow_inf_nan=False)]
+Fraction = Annotated[float, Field(ge=0, le=1, allow_inf_nan=False)]
+SpriteScale = Annotated[float, Field(gt=0, le=1000, allow_inf_nan=False)]
 Vec2 = tuple[Coord, Coord]
 Region = tuple[Coord, Coord, Coord, Coord]
 Length = Annotated[float, Field(ge=MIN_SIZE, le=MAX_COORD, allow_inf_nan=False)]
@@ -171,12 +174,15 @@ class LevelInfo(_Model):
     @classmethod
     def _theme_inside(cls, value: str | None) -> str | None:
         if value is not None and not _THEME_NAME.match(value):
+            if not value.endswith(".json"):
+                raise ValueError("must be a shipped theme's name or a .json file")
             check_relative_file(value, ".json")
         return value
 
 
 def check_relative_file(name: str, suffix: str) -> None:
-    """Raise ``ValueError`` unless ``name`` is a relative path that cannot leave its folder.
+    """Raise ``ValueError`` unless ``name`` is a relative path that cannot leave its folder and
+    ends with ``suffix``.
 
     Whether the file exists, and where its symlinks lead, is checked when the level is loaded
     from a file (:func:`ikgame.level.loader.resolve_level_file`).
@@ -195,7 +201,46 @@ def check_relative_file(name: str, suffix: str) -> None:
     if ".." in name.split("/"):
         raise ValueError("must stay inside the level's folder or assets/: '..' is not allowed")
     if not name.endswith(suffix):
-        raise ValueError(f"must be a shipped theme's name or a {suffix} file")
+        raise ValueError(f"must be a {suffix} file")
+
+
+def _check_sprite_fields(model: LinkConfig | _Prop) -> None:
+    """``sprite_pivot`` and ``sprite_scale`` mean nothing without a ``sprite``: say so."""
+    if model.sprite is None:
+        for name in ("sprite_pivot", "sprite_scale"):
+            if name in model.model_fields_set:
+                raise _invalid((name,), "only applies with sprite", getattr(model, name))
+
+
+def _png_inside(value: str) -> str:
+    check_relative_file(value, ".png")
+    return value
+
+
+SpritePath = Annotated[str, Field(min_length=1, max_length=200), AfterValidator(_png_inside)]
+
+
+# The sprite fields of links and props differ only in words and the pivot's default.
+def _sprite_field(replaces: str, orientation: str) -> Any:
+    return Field(
+        None,
+        description=f"A PNG image drawn in place of {replaces} (a file in the level's folder or "
+        f"assets/); {orientation}.",
+    )
+
+
+def _pivot_field(default: tuple[float, float], onto: str) -> Any:
+    return Field(
+        default,
+        description=f"The image point that sits on {onto}, as fractions of the image's width "
+        "and height from its top-left corner.",
+    )
+
+
+def _scale_field(spans: str) -> Any:
+    return Field(
+        None, description=f"World px per image px; default: the image's width spans {spans}."
+    )
 
 
 class WorldConfig(_Model):
@@ -260,6 +305,11 @@ class LinkConfig(_Model):
         360.0, gt=0, le=36000, allow_inf_nan=False, description="Motor speed limit, deg/s."
     )
     repeat: int = Field(1, ge=1, le=MAX_LINKS, description="Use this link this many times.")
+    sprite: SpritePath | None = _sprite_field(
+        "the link's capsule", "the image's +x axis points along the link"
+    )
+    sprite_pivot: tuple[Fraction, Fraction] = _pivot_field((0.0, 0.5), "the link's joint")
+    sprite_scale: SpriteScale | None = _scale_field("the link's length")
 
     @model_validator(mode="after")
     def _limits_ordered(self) -> LinkConfig:
@@ -269,6 +319,7 @@ class LinkConfig(_Model):
                 f"must be [min, max] with min < max, got {list(self.limits)}",
                 list(self.limits),
             )
+        _check_sprite_fields(self)
         return self
 
     @property
@@ -368,6 +419,16 @@ class _Prop(_Model):
         description="Bounce off obstacles, 0 (none) to 1 (full); two props bounce with the "
         "product of theirs; links never bounce.",
     )
+    sprite: SpritePath | None = _sprite_field(
+        "the prop's shape", "upright at angle 0, it turns with the prop"
+    )
+    sprite_pivot: tuple[Fraction, Fraction] = _pivot_field((0.5, 0.5), "the prop's centre")
+    sprite_scale: SpriteScale | None = _scale_field("the ball's diameter or the box's width")
+
+    @model_validator(mode="after")
+    def _sprite_given(self) -> _Prop:
+        _check_sprite_fields(self)
+        return self
 
 
 class BallProp(_Prop):
@@ -634,8 +695,9 @@ def step_count(script: list[Step] | tuple[Step, ...]) -> int:
 def _check_start_clear(
     chain: ChainConfig, obstacles: list[SegmentObstacle | CircleObstacle]
 ) -> None:
-    """Refuse a chain that starts inside an obstacle: link 1 is pinned to the base, so the
-    physics would push the link out against a joint it cannot move, without bound."""
+    """Refuse a chain whose links start with their axis inside an obstacle: the links hang from
+    a fixed base, so the physics would push them out against joints that cannot give, without
+    bound."""
     angle = math.radians(chain.angle)
     joint = chain.base
     for k, link in enumerate(chain.expanded_links):
@@ -647,13 +709,15 @@ def _check_start_clear(
                 gap = _segments_distance(joint, end, obstacle.a, obstacle.b)
             else:
                 gap = _point_segment_distance(obstacle.center, joint, end)
-            overlap = link.width / 2 + obstacle.radius - gap
-            if overlap > 0:
+            # A link's rounded edge may start in an obstacle (pymunk eases a shallow overlap
+            # out); its axis may not.
+            if gap < obstacle.radius:
                 raise _invalid(
                     ("obstacles", j),
-                    f"link {k + 1} of the chain starts inside this obstacle (by {overlap:.3g} "
-                    "px); the chain hangs from a fixed base and could not be pushed out: move "
-                    "the obstacle or change chain.base / chain.angle",
+                    f"link {k + 1} of the chain starts inside this obstacle (its axis "
+                    f"{obstacle.radius - gap:.3g} px deep); the chain hangs from a fixed base "
+                    "and could not be pushed out: move the obstacle or change chain.base / "
+                    "chain.angle",
                     None,
                 )
         joint = end

@@ -15,7 +15,17 @@ from typing import Final
 
 from ikgame.level import model
 from ikgame.level.library import shipped_levels
-from ikgame.level.loader import MAX_ASSET_BYTES, MAX_FILE_BYTES, LevelError, Problem, load_level
+from ikgame.level.loader import (
+    MAX_ASSET_BYTES,
+    MAX_FILE_BYTES,
+    MAX_SPRITE_BYTES,
+    MAX_SPRITE_PIXELS,
+    MAX_SPRITE_SIDE,
+    MAX_SPRITE_TOTAL_PIXELS,
+    LevelError,
+    Problem,
+    load_level,
+)
 from ikgame.level.model import Level, step_count
 
 __all__ = [
@@ -170,7 +180,13 @@ def reference_markdown() -> str:
 def _limits() -> list[tuple[str, str]]:
     return [
         ("Level file size", f"{MAX_FILE_BYTES:,} bytes"),
-        ("Size of a file a level names (theme)", f"{MAX_ASSET_BYTES:,} bytes"),
+        ("Size of a theme file", f"{MAX_ASSET_BYTES:,} bytes"),
+        ("Size of a sprite image file", f"{MAX_SPRITE_BYTES:,} bytes"),
+        (
+            "Pixels of a sprite image",
+            f"{MAX_SPRITE_PIXELS:,}, at most {MAX_SPRITE_SIDE} px a side",
+        ),
+        ("Pixels of all a level's sprite images together", f"{MAX_SPRITE_TOTAL_PIXELS:,}"),
         ("Links in the chain (after `repeat`)", str(model.MAX_LINKS)),
         ("Duration", f"{model.MAX_DURATION:g} s"),
         ("Recorded frames (`duration` x `fps`)", f"{model.MAX_FRAMES:,}"),

@@ -146,6 +146,12 @@ class World:
             self.space.add(body, shape)
             self.prop_bodies.append(body)
         self._base_move: _BaseMove | None = None
+        self.link_masses = np.array([b.mass for b in self.bodies], dtype=float)
+        """(n,) mass of each link."""
+        self.link_moments = np.array([b.moment for b in self.bodies], dtype=float)
+        """(n,) moment of inertia of each link about its centre, mass px^2."""
+        self._lengths = 2.0 * np.array(self._halves, dtype=float)
+        self._feed_forward = np.zeros(self.count)
 
     @property
     def count(self) -> int:
@@ -161,6 +167,15 @@ class World:
         angles = np.fromiter((b.angle for b in self.bodies), float, self.count)
         parents = np.concatenate(([self.base_body.angle], angles[:-1]))
         return angles - parents
+
+    def link_angles(self) -> np.ndarray:
+        """(n,) world angle of each link, radians (continuous, not wrapped)."""
+        return np.fromiter((b.angle for b in self.bodies), float, self.count)
+
+    @property
+    def gravity(self) -> np.ndarray:
+        """(2,) gravity now, px/s^2."""
+        return np.array(self.space.gravity)
 
     def joint_velocities(self) -> np.ndarray:
         """(n,) relative angular velocity of each joint (child - parent), rad/s."""
@@ -180,18 +195,79 @@ class World:
         return np.array(self.bodies[-1].local_to_world((self._halves[-1], 0.0)))
 
     def set_rates(self, rates: np.ndarray) -> None:
-        """Ask each joint's motor for a relative angular velocity (child - parent), rad/s."""
-        for motor, rate in zip(self.motors, rates, strict=True):
+        """Ask each joint's motor for a relative angular velocity (child - parent), rad/s.
+
+        Each motor may use its whole torque limit; :meth:`drive` shares the limit with
+        feed-forward torques instead.
+        """
+        self.drive(rates, np.zeros(self.count), np.zeros((self.count, 2)), self.max_torque)
+
+    def drive(
+        self,
+        rates: np.ndarray,
+        torques: np.ndarray,
+        forces: np.ndarray,
+        budgets: np.ndarray,
+    ) -> None:
+        """Apply feed-forward joint loads for the next step and let the motors correct the rest.
+
+        ``torques`` (n,) act on each child with the reaction on its parent; ``forces`` (n, 2) are
+        the pivot forces, parent on child at the joint (world frame): the pivots would carry
+        them anyway, so giving them here only saves the constraint solver from finding them.
+        The base body is kinematic and takes the reactions of joint 0. Each motor then holds
+        its ``rates`` entry (rad/s) with at most its ``budgets`` entry of torque, so that a
+        joint's feed-forward torque and its motor's never add up to more than its limit.
+
+        >>> from ikgame.level.model import Level
+        >>> world = World(Level.model_validate({"level": {"name": "x", "duration": 1.0},
+        ...     "world": {"gravity": [0.0, 0.0]}, "chain": {"links": [{"length": 50.0}]},
+        ...     "script": [{"wait": 1.0}]}))
+        >>> about_joint = world.link_moments[0] + world.link_masses[0] * 25.0**2
+        >>> torque = about_joint * 4.0 * 240.0  # to reach 4 rad/s in one 1/240 s tick
+        >>> world.drive(np.zeros(1), np.array([torque]), np.zeros((1, 2)), np.zeros(1))
+        >>> world.step(1 / 240)
+        >>> round(float(world.joint_velocities()[0]), 6)
+        4.0
+        """
+        angles = self.link_angles()
+        halves = (0.5 * self._lengths)[:, None] * np.stack((np.cos(angles), np.sin(angles)), -1)
+        beyond_forces = np.concatenate((forces[1:], np.zeros((1, 2))))
+        beyond_torques = np.concatenate((torques[1:], np.zeros(1)))
+        pair = forces + beyond_forces
+        # Each body takes its joint's loads and the reactions of the next joint's, both acting at
+        # the link's ends, so the pivot forces turn it about its centre too.
+        body_torques = (
+            torques - beyond_torques - (halves[:, 0] * pair[:, 1] - halves[:, 1] * pair[:, 0])
+        )
+        body_forces = forces - beyond_forces
+        for body, force, torque in zip(self.bodies, body_forces, body_torques, strict=True):
+            body.force = (float(force[0]), float(force[1]))
+            body.torque = float(torque)
+        for motor, rate, budget in zip(self.motors, rates, budgets, strict=True):
+            # SimpleMotor drives (b.w - a.w) toward -rate.
             motor.rate = -float(rate)
+            motor.max_force = float(budget)
+        self._feed_forward = np.array(torques, dtype=float)
 
     def motor_torques(self) -> np.ndarray:
-        """(n,) torque each motor applied during the last step (impulse / dt)."""
+        """(n,) magnitude of the torque each joint applied during the last step: feed-forward
+        plus its motor's correction (the motor's impulse / dt)."""
         dt = self.last_dt
-        return np.fromiter((abs(m.impulse) / dt for m in self.motors), float, self.count)
+        motor = np.fromiter((m.impulse / dt for m in self.motors), float, self.count)
+        return np.abs(self._feed_forward + motor)
 
     def torque_limited(self) -> np.ndarray:
-        """(n,) bool: which motors were at their torque limit during the last step."""
+        """(n,) bool: which joints were at their torque limit during the last step."""
         return self.motor_torques() >= self.max_torque * (1.0 - 1e-6)
+
+    def touching(self) -> bool:
+        """True when any link of the chain is in contact with an obstacle or a prop."""
+        for body in self.bodies:
+            contacts: list[object] = []
+            body.each_arbiter(contacts.append)
+            if contacts:
+                return True
+        return False
 
     def set_gravity(self, gravity: tuple[float, float]) -> None:
         """Change gravity from now on, px/s^2."""

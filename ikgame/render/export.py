@@ -1,5 +1,5 @@
-"""Write a recorded run to disk: PNG frames, a looping GIF, an APNG, a contact sheet, and the baked
-motion as JSON keyframes.
+"""Write a recorded run to disk: PNG frames, a looping GIF, an APNG, an MP4, a contact sheet, and
+the baked motion as JSON keyframes.
 
 Frames are independent of each other (each frame's trail is read from the snapshot list), so they
 can be drawn in worker processes; every byte that ends up in a file comes from the same
@@ -7,7 +7,8 @@ deterministic functions either way, so a parallel export is identical to a seria
 written to a temporary name in their folder and renamed into place, so a reader never sees half a
 file, and an interrupted export leaves no stray temporaries. The GIF and APNG are streamed one
 frame at a time, so a long run does not hold its frames in memory; their file formats are written
-by :mod:`ikgame.render.animation`, while this module decides what goes into them.
+by :mod:`ikgame.render.animation` (and the MP4 by :mod:`ikgame.render.video`), while this module
+decides what goes into them.
 """
 
 from __future__ import annotations
@@ -40,6 +41,7 @@ from ikgame.render.animation import ApngWriter, GifWriter, build_palette, gif_du
 from ikgame.render.camera import Camera
 from ikgame.render.pillow import render_snapshot
 from ikgame.render.theme import Theme, load_theme
+from ikgame.render.video import Mp4Writer, check_video, even_size
 from ikgame.snapshot import Scene, Snapshot
 
 __all__ = ["check_out_dir", "export_run", "motion_json", "parse_size", "trail_at"]
@@ -226,6 +228,7 @@ class _Job:
     theme: Theme
     png: bool  # encode PNG bytes (frames or APNG)
     gif_stride: int  # every gif_stride-th frame goes into the GIF; 0 without a GIF
+    mp4: bool = False  # raw RGB of the even-sided frame, for the MP4 encoder
 
     def render(self, index: int, hud: bool = True) -> Image.Image:
         trail = trail_at(self.snapshots, index, self.scene.fps)
@@ -238,14 +241,18 @@ class _Job:
             hud=hud,
         )
 
-    def payload(self, index: int, palette: bytes | None) -> tuple[bytes | None, bytes | None]:
-        """Frame ``index`` as PNG bytes and as GIF palette indices (None where not wanted)."""
+    def payload(self, index: int, palette: bytes | None) -> tuple[bytes | None, ...]:
+        """Frame ``index`` as PNG bytes, as GIF palette indices and as the MP4's RGB bytes
+        (None where not wanted)."""
         image = self.render(index)
         png = _png_bytes(image) if self.png else None
         indices = None
         if palette is not None and index % self.gif_stride == 0:
             indices = quantizer(palette).indices(image)
-        return png, indices
+        rgb = None
+        if self.mp4:
+            rgb = image.crop((0, 0, *even_size(image.size))).tobytes()
+        return png, indices, rgb
 
 
 def _png_bytes(image: Image.Image) -> bytes:
@@ -283,7 +290,9 @@ def _worker_payloads(
     payloads = [_WORKER_JOB.payload(i, palette) for i in range(start, stop)]
     # Palette indices are a byte per pixel but mostly runs: compressed they are ~5% of the
     # size, both in the pipe to the main process and in results queued for their turn.
-    return [(png, None if idx is None else zlib.compress(idx, 1)) for png, idx in payloads]
+    return [
+        (png, None if idx is None else zlib.compress(idx, 1), rgb) for png, idx, rgb in payloads
+    ]
 
 
 def _worker_rgb(index: int) -> bytes:
@@ -337,7 +346,7 @@ def _pool(job: _Job, workers: int) -> Iterator[ProcessPoolExecutor | None]:
 
 def _payloads(
     job: _Job, pool: ProcessPoolExecutor | None, workers: int, palette: bytes | None
-) -> Iterator[tuple[bytes | None, bytes | None]]:
+) -> Iterator[tuple[bytes | None, ...]]:
     """Every frame's payload, in order, drawn here or by the pool."""
     count = len(job.snapshots)
     if pool is None:
@@ -358,8 +367,8 @@ def _payloads(
     while pending:
         results = pending.popleft().result()
         submit()
-        for png, packed in results:
-            yield png, None if packed is None else zlib.decompress(packed)
+        for png, packed, rgb in results:
+            yield png, None if packed is None else zlib.decompress(packed), rgb
 
 
 def _sample_images(
@@ -427,6 +436,7 @@ def export_run(
     gif: bool = True,
     apng: bool = False,
     sheet: bool = False,
+    mp4: bool = False,
     motion: bool = True,
     workers: int | None = None,
     progress: bool = True,
@@ -436,6 +446,7 @@ def export_run(
     ``frames/000000.png``... one per snapshot; ``run.gif`` looping, with one shared adaptive
     palette and delays that add up to the run's length (runs above 50 fps keep every 2nd, 3rd...
     frame, as browsers slow faster GIFs down); ``run.png`` an APNG at the exact frame rate;
+    ``run.mp4`` H.264 at the run's fps (needs the ``video`` extra; see :mod:`ikgame.render.video`);
     ``sheet.png`` a contact sheet of about 12 frames; ``motion.json`` (see :func:`motion_json`).
     ``workers`` processes draw the frames (None: one per CPU for long runs, else 1); the files
     are the same byte for byte whatever the count. Workers are spawned, so, as always with
@@ -453,6 +464,8 @@ def export_run(
     snapshots = tuple(snapshots)
     _check_run(scene, snapshots)
     size = _check_export_size(size)
+    if mp4:
+        check_video()
     resolved_theme = theme if isinstance(theme, Theme) else load_theme(theme)
     workers = _worker_count(workers, len(snapshots))
     out = Path(out_dir)
@@ -465,11 +478,12 @@ def export_run(
         theme=resolved_theme,
         png=frames or apng,
         gif_stride=stride,
+        mp4=mp4,
     )
     samples = _sample_indices(len(snapshots), SHEET_THUMBS)
     show_progress = progress and sys.stderr.isatty()
     try:
-        written = _write_frames(out, job, workers, samples, frames, gif, apng, show_progress)
+        written = _write_frames(out, job, workers, samples, frames, gif, apng, mp4, show_progress)
     finally:
         # The colour table is 32 MB: keep it no longer than the export that needed it.
         quantizer.cache_clear()
@@ -490,6 +504,7 @@ def _write_frames(
     frames: bool,
     gif: bool,
     apng: bool,
+    mp4: bool,
     progress: bool,
 ) -> list[Path]:
     """Draw every frame once and stream it to the PNG frames, the GIF and the APNG."""
@@ -520,7 +535,11 @@ def _write_frames(
             animations.append(out / "run.png")
             apng_file = files.enter_context(atomic_open(animations[-1]))
             apng_writer = ApngWriter(apng_file, count, size, job.scene.fps)
-        for index, (png, indices) in enumerate(_payloads(job, pool, workers, palette)):
+        video = None
+        if mp4:
+            animations.append(out / "run.mp4")
+            video = files.enter_context(Mp4Writer(animations[-1], even_size(size), job.scene.fps))
+        for index, (png, indices, rgb) in enumerate(_payloads(job, pool, workers, palette)):
             if frames:
                 assert png is not None
                 frame_paths.append(write_atomic(frames_dir / f"{index:06d}.png", png))
@@ -529,6 +548,9 @@ def _write_frames(
             if apng_writer is not None:
                 assert png is not None
                 apng_writer.add(png)
+            if video is not None:
+                assert rgb is not None
+                video.add(rgb)
             update(index + 1)
         # Trailers last, inside the block: the atomic files are renamed into place on its exit.
         if gif_writer is not None:

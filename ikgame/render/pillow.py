@@ -5,6 +5,8 @@ Pillow's primitives are not anti-aliased, and averaging many sub-pixels is the c
 get smooth edges. The static scene (background, grid, goals, obstacles) is drawn and shrunk once
 per run; each frame redraws and shrinks only the rectangle its moving parts cover, which makes
 a frame about three times cheaper. The HUD is drawn after the shrink so its text stays crisp.
+Links and props that carry a sprite are drawn as their images instead of their shapes
+(:func:`_draw_sprites`, with :mod:`ikgame.render.sprites`), over the shapes, under the crosshair.
 Translucent layers (goals, trail, faded targets) are blended with the background colour by hand
 instead of alpha compositing a full-size layer, which would cost as much as the rest of a frame.
 
@@ -20,8 +22,9 @@ import numpy as np
 from PIL import Image, ImageDraw, ImageFont
 
 from ikgame.render.camera import Camera
+from ikgame.render.sprites import draw_sprite, sprite_corners
 from ikgame.render.theme import RGB, Theme
-from ikgame.snapshot import Scene, Snapshot
+from ikgame.snapshot import Scene, Snapshot, Sprite
 
 __all__ = ["render_snapshot", "to_draw_coords"]
 
@@ -95,7 +98,7 @@ def render_snapshot(
         paste, crop = boxes
         region = static_big.crop(tuple(v * supersample for v in crop))
         offset = (crop[0] * supersample, crop[1] * supersample)
-        painter = _Painter(ImageDraw.Draw(region), big, theme, supersample, offset)
+        painter = _Painter(ImageDraw.Draw(region), big, theme, supersample, offset, region)
         _draw_dynamic(painter, scene, snapshot, trail)
         if supersample > 1:
             region = region.resize((crop[2] - crop[0], crop[3] - crop[1]), Image.Resampling.LANCZOS)
@@ -115,6 +118,7 @@ def _draw_dynamic(
         painter.trail(np.asarray(trail, dtype=float).reshape(-1, 2))
     painter.props(scene, snapshot)
     painter.chain(scene, snapshot)
+    _draw_sprites(painter, scene, snapshot)
     if snapshot.target is not None:
         painter.crosshair(np.asarray(snapshot.target, dtype=float))
 
@@ -206,8 +210,11 @@ class _Painter:
         theme: Theme,
         ss: int,
         offset: tuple[int, int] = (0, 0),
+        image: Image.Image | None = None,
     ) -> None:
         self.draw = draw
+        # The image ``draw`` draws on, for pasting sprites; None on the measuring pass.
+        self.image = image
         self.camera = camera
         self.theme = theme
         self.ss = ss  # drawing pixels per output pixel
@@ -313,7 +320,10 @@ class _Painter:
                 f"snapshot has {len(poses)} prop poses but the scene has {len(scene.props)} props"
             )
         theme, scale, ss = self.theme, self.camera.scale, self.ss
-        for shape, (x, y, angle) in zip(scene.props, poses, strict=True):
+        skinned = _skinned(scene.prop_sprites, len(poses), "prop")
+        for shape, (x, y, angle), skin in zip(scene.props, poses, skinned, strict=True):
+            if skin:
+                continue
             center = self.px([[x, y]])[0]
             if shape.kind == "ball":
                 r = shape.size[0] * scale
@@ -355,11 +365,12 @@ class _Painter:
         if len(limited) not in (0, n):
             raise ValueError(f"torque_limited has {len(limited)} entries for {n} links")
 
+        skinned = _skinned(scene.link_sprites, n, "link")
         self.mount(points[0], radii[0])
         # All outlines first, so where links overlap at a joint the fills merge seamlessly.
-        for i in range(n):
+        for i in np.flatnonzero(~skinned):
             self.capsule(points[i], points[i + 1], radii[i] + LINK_OUTLINE * ss, theme.link_outline)
-        for i in range(n):
+        for i in np.flatnonzero(~skinned):
             fill = theme.torque_limited if len(limited) and limited[i] else theme.link
             self.capsule(points[i], points[i + 1], radii[i], fill)
         for i in range(1, n):
@@ -370,6 +381,15 @@ class _Painter:
         self.circle(
             points[-1], max(0.6 * radii[-1], 2.5 * ss), theme.effector, theme.link_outline, 1.2 * ss
         )
+
+    def sprite(self, sprite: Sprite, point: np.ndarray, angle: float) -> None:
+        """``sprite`` with its pivot on world ``point``, turned by ``angle`` (world radians)."""
+        # Sprites are placed in pixel-corner coordinates, half a pixel off Pillow's primitives.
+        anchor = tuple(self.px(point)[0] + 0.5)
+        if self.image is None:  # the measuring pass: only the box it covers counts
+            self.draw.polygon(sprite_corners(sprite, anchor, angle, self.camera.scale))
+        else:
+            draw_sprite(self.image, sprite, anchor, angle, self.camera.scale)
 
     def mount(self, base: np.ndarray, link_radius: float) -> None:
         """A pedestal under the base with a hatched ground line, like an engineering drawing."""
@@ -410,6 +430,27 @@ class _Painter:
                 width=width,
             )
         self.circle(c, 1.6 * ss, color)
+
+
+def _draw_sprites(painter: _Painter, scene: Scene, snapshot: Snapshot) -> None:
+    """Prop and link images, over the shapes of the rest (links base first, so each link's
+    image lies on its parent's)."""
+    poses = np.asarray(snapshot.props, dtype=float).reshape(-1, 3)
+    for sprite, (x, y, angle) in zip(scene.prop_sprites, poses, strict=False):
+        if sprite is not None:
+            painter.sprite(sprite, np.array([x, y]), angle)
+    joints = np.asarray(snapshot.joints, dtype=float)
+    for i, sprite in enumerate(scene.link_sprites):
+        if sprite is not None:
+            (ax, ay), (bx, by) = joints[i], joints[i + 1]
+            painter.sprite(sprite, joints[i], math.atan2(by - ay, bx - ax))
+
+
+def _skinned(sprites: tuple[Sprite | None, ...], count: int, what: str) -> np.ndarray:
+    """Which of ``count`` links or props have a sprite, (count,) bool."""
+    if len(sprites) not in (0, count):
+        raise ValueError(f"scene has {len(sprites)} {what} sprites for {count} {what}s")
+    return np.array([s is not None for s in sprites] or [False] * count, dtype=bool)
 
 
 def _upcoming(scene: Scene, snapshot: Snapshot) -> np.ndarray:
@@ -521,7 +562,7 @@ def _font(size: int) -> ImageFont.FreeTypeFont | ImageFont.ImageFont:
 
 def _hud_lines(scene: Scene, snapshot: Snapshot, theme: Theme) -> list[list[tuple[str, RGB]]]:
     """The HUD's text as lines of (text, colour) runs."""
-    status_colors = {"success": theme.success, "failure": theme.failure}
+    status_colors = {"success": theme.success, "failure": theme.failure, "blocked": theme.failure}
     stats: list[tuple[str, RGB]] = [(f"t {snapshot.time:.2f} s", theme.hud_text)]
     if scene.step_count:
         if snapshot.step_index >= scene.step_count:

@@ -198,3 +198,140 @@ def test_the_solver_names_a_level_may_use_are_the_registered_solvers():
     from ikgame.level.model import SOLVER_NAMES
 
     assert sorted(SOLVER_NAMES) == sorted(SOLVERS)
+
+
+# -- sprite images -------------------------------------------------------------------------------
+
+SKINNED = SMALL.replace("length = 50.0", 'length = 50.0\nsprite = "arm.png"')  # sprite: line 7
+
+
+def _png(path: Path, size=(40, 10), color=(200, 60, 60, 255)) -> bytes:
+    from PIL import Image
+
+    Image.new("RGBA", size, color).save(path, "PNG")
+    return path.read_bytes()
+
+
+def _load_problems(level_file: Path) -> list[str]:
+    with pytest.raises(LevelError) as exc:
+        load_level(level_file)
+    return [str(p).replace(str(level_file), level_file.name) for p in exc.value.problems]
+
+
+def test_a_sprite_in_the_level_folder_or_in_assets_loads(tmp_path):
+    level_file = tmp_path / "lvl.toml"
+    _png(tmp_path / "arm.png")
+    level_file.write_text(SKINNED)
+    assert load_level(level_file).chain.links[0].sprite == "arm.png"
+    level_file.write_text(SKINNED.replace("arm.png", "sprites/ball.png"))
+    assert load_level(level_file).chain.links[0].sprite_pivot == (0.0, 0.5)
+
+
+def _damaged(data: bytes) -> bytes:
+    at = data.index(b"IDAT") + 6
+    return data[:at] + bytes([data[at] ^ 0xFF]) + data[at + 1 :]
+
+
+@pytest.mark.parametrize(
+    ("content", "message"),
+    [
+        (None, "no file 'arm.png' in the level's folder or assets/"),
+        (lambda png: b"GIF89a not a png at all", "'arm.png' is not a PNG image"),
+        (lambda png: png[: len(png) // 2], "'arm.png' is cut short (a damaged PNG)"),
+        (_damaged, "'arm.png' is damaged (a PNG chunk fails its checksum)"),
+    ],
+)
+def test_a_sprite_that_cannot_be_used_is_reported_at_its_line(tmp_path, content, message):
+    level_file = tmp_path / "lvl.toml"
+    level_file.write_text(SKINNED)
+    png = _png(tmp_path / "arm.png")
+    if content is None:
+        (tmp_path / "arm.png").unlink()
+    else:
+        (tmp_path / "arm.png").write_bytes(content(png))
+    assert _load_problems(level_file) == [f"lvl.toml:7: chain.links[0].sprite: {message}"]
+
+
+@pytest.mark.parametrize(
+    ("size", "shown"), [((1100, 1000), "1100x1000"), ((2049, 4), "2049x4"), ((0, 0), "0x0")]
+)
+def test_a_sprite_too_large_in_pixels_is_refused_before_it_is_decoded(tmp_path, size, shown):
+    # Only the header is read: forge one, so the test needs no megapixel image.
+    import struct
+    import zlib
+
+    def chunk(kind: bytes, body: bytes) -> bytes:
+        return (
+            struct.pack(">I", len(body)) + kind + body + struct.pack(">I", zlib.crc32(kind + body))
+        )
+
+    header = struct.pack(">IIBBBBB", *size, 8, 6, 0, 0, 0)
+    data = b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", header) + chunk(b"IDAT", b"") + chunk(b"IEND", b"")
+    (tmp_path / "arm.png").write_bytes(data)
+    level_file = tmp_path / "lvl.toml"
+    level_file.write_text(SKINNED)
+    (problem,) = _load_problems(level_file)
+    assert problem.startswith(f"lvl.toml:7: chain.links[0].sprite: 'arm.png' is {shown} px")
+
+
+def test_a_sprite_file_too_large_in_bytes_is_refused(tmp_path):
+    from ikgame.level.loader import MAX_SPRITE_BYTES
+
+    (tmp_path / "arm.png").write_bytes(b"\0" * (MAX_SPRITE_BYTES + 1))
+    level_file = tmp_path / "lvl.toml"
+    level_file.write_text(SKINNED)
+    assert _load_problems(level_file) == [
+        f"lvl.toml:7: chain.links[0].sprite: 'arm.png' is larger than {MAX_SPRITE_BYTES:,} bytes"
+    ]
+
+
+def test_a_sprite_outside_the_level_folder_and_assets_is_refused(tmp_path):
+    inside = tmp_path / "level"
+    inside.mkdir()
+    _png(tmp_path / "secret.png")
+    os.symlink(tmp_path / "secret.png", inside / "arm.png")
+    level_file = inside / "lvl.toml"
+    level_file.write_text(SKINNED)
+    (problem,) = _load_problems(level_file)
+    assert problem.startswith("lvl.toml:7: chain.links[0].sprite: 'arm.png' leads outside")
+    assert _problems(SKINNED.replace("arm.png", "../secret.png")) == [
+        "t.toml:7: chain.links[0].sprite: must stay inside the level's folder or assets/: "
+        "'..' is not allowed (got '../secret.png')"
+    ]
+    assert "not an absolute path" in _problems(SKINNED.replace("arm.png", "/tmp/arm.png"))[0]
+    assert "must be a .png file" in _problems(SKINNED.replace("arm.png", "arm.jpg"))[0]
+
+
+def test_the_sprites_of_a_level_share_a_pixel_budget(tmp_path):
+    from ikgame.level.loader import MAX_SPRITE_PIXELS, MAX_SPRITE_TOTAL_PIXELS
+
+    count = MAX_SPRITE_TOTAL_PIXELS // MAX_SPRITE_PIXELS + 1
+    links = ""
+    for k in range(count):
+        _png(tmp_path / f"p{k}.png", size=(1024, 1024), color=(k, 0, 0, 255))
+        links += f'[[chain.links]]\nlength = 10.0\nsprite = "p{k}.png"\n'
+    level_file = tmp_path / "lvl.toml"
+    level_file.write_text(SMALL.replace("[[chain.links]]\nlength = 50.0\n", links))
+    (problem,) = _load_problems(level_file)
+    assert f"chain.links[{count - 1}].sprite: the level's sprite images hold" in problem
+    assert f"at most {MAX_SPRITE_TOTAL_PIXELS:,}" in problem
+
+
+def test_sprite_pivot_and_scale_need_a_sprite():
+    text = SMALL.replace("length = 50.0", "length = 50.0\nsprite_scale = 2.0")
+    assert _problems(text) == ["t.toml:7: chain.links[0].sprite_scale: only applies with sprite"]
+    prop = '[[props]]\nkind = "ball"\nname = "b"\nposition = [0.0, 0.0]\nradius = 5.0\n'
+    text = SMALL + prop + "sprite_pivot = [0.5, 2.0]\n"
+    assert _problems(text) == [
+        "t.toml:14: props[0].sprite_pivot[1]: Input should be less than or equal to 1 (got 2.0)"
+    ]
+
+
+def test_a_missing_sprite_named_twice_is_reported_at_both_lines(tmp_path):
+    level_file = tmp_path / "lvl.toml"
+    level_file.write_text(
+        SKINNED.replace(
+            "[[script]]", '[[chain.links]]\nlength = 20.0\nsprite = "arm.png"\n[[script]]'
+        )
+    )
+    assert [p.split(": ")[0] for p in _load_problems(level_file)] == ["lvl.toml:7", "lvl.toml:10"]

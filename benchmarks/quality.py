@@ -1,0 +1,494 @@
+"""Motion-quality suite: ``python benchmarks/quality.py [--quick] [--levels ...] [--solvers ...]``.
+
+Runs every stress level (``benchmarks/stress_levels/``) with each IK solver in the physics world
+and prints one table of level x solver: targets reached, time to reach, overshoot, rest jitter,
+joint-limit excursion, spins, torque-saturated frames and the solver states the steps ended in,
+each cell marked against the thresholds below. docs/quality.md defines every measure.
+
+Only the public simulation API is used: ``ikgame.Simulation(level, solver=..., record=False)``,
+``step()``, ``done``, ``diverged``, ``joint_positions()``, ``joint_angles()``, ``last_tick``
+(``solver_status``, ``torque_limited``), ``target``, ``script.step_index``, ``script.steps``
+and ``result``. The output is the same on every run apart from the wall times.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+import time
+from collections import Counter
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Final
+
+import numpy as np
+from _quality_metrics import (
+    ChainSpec,
+    approach_overshoot,
+    limit_excursion_deg,
+    rest_jitter,
+    spin_joints,
+    stretched_toward,
+)
+from pydantic import ValidationError
+from rich.console import Console
+from rich.table import Table
+
+import ikgame
+from ikgame.level.model import CircleObstacle, Level, ReachStep, SegmentObstacle
+
+STRESS_DIR: Final = Path(__file__).resolve().parent / "stress_levels"
+SOLVER_NAMES: Final = ("ccd", "jacobian_transpose", "dls", "fabrik")
+
+# What a reach step should end as, when not "reached"; the level format has no field for it.
+REACHABLE: Final = "reachable"
+OUT_OF_REACH: Final = "out_of_reach"
+"""Farther than the chain is long: fail with ``failure``, at rest, stretched toward it."""
+TORQUE_BOUND: Final = "torque_bound"
+"""Within length, beyond the torque budget: come to rest where the torque runs out."""
+JAMMED: Final = "jammed"
+"""Within length, but an obstacle is in the way: come to rest and report ``blocked``."""
+
+EXPECTATIONS: Final[dict[str, dict[int, str]]] = {
+    "09_just_out_of_reach.toml": {1: OUT_OF_REACH, 3: OUT_OF_REACH},
+    "13_heavy_weak.toml": {0: TORQUE_BOUND},
+    "16_jammed.toml": {1: JAMMED},
+}
+"""Stress level file -> {step index as the run counts them: the kind of an unreachable step}.
+Every other reach step is reachable (tests/test_stress_levels.py proves it with a pose)."""
+
+QUICK: Final = (
+    "01_one_link.toml",
+    "02_chain30_gravity.toml",
+    "06_one_sided_limits.toml",
+    "08_full_reach.toml",
+    "09_just_out_of_reach.toml",
+    "13_heavy_weak.toml",
+)
+"""The levels of ``--quick``: one of each failure the suite was built to show."""
+
+OVERSHOOT_PCT: Final = 5.0
+"""Largest overshoot that passes, % of the approach distance."""
+JITTER_PX: Final = 0.5
+"""Largest rest jitter that passes, px."""
+SATURATED_JITTER_PX: Final = 1.0
+"""Largest rest jitter of an arm held by its torque limit (torque-bound or jammed), px."""
+LIMIT_DEG: Final = 2.0
+"""Largest joint-limit excursion that passes, degrees."""
+REST_WINDOW_S: Final = 0.5
+"""The rest jitter is measured over this last part of a step, s."""
+SPIN_DEG: Final = 180.0
+"""A joint turning through more than this within a hold spins, degrees."""
+
+_STATE_LETTERS: Final = {"success": "s", "processing": "p", "failure": "f", "blocked": "b"}
+_EPS: Final = 1e-9
+
+
+@dataclass
+class StepReport:
+    """How one scored step of a run went, measured from its ticks."""
+
+    index: int
+    kind: str
+    expect: str
+    passed: bool
+    time_to_reach: float | None
+    overshoot_pct: float | None
+    jitter_px: float | None
+    jitter_limit_px: float | None
+    spins: int
+    final_state: str
+    expectation_met: bool | None
+
+
+@dataclass
+class RunReport:
+    """One stress level run with one solver: the measures, and whether each passes."""
+
+    level: str
+    solver: str
+    status: str
+    reached: int
+    reachable: int
+    mean_time_to_reach: float | None
+    overshoot_pct: float | None
+    jitter_px: float | None
+    limit_excursion_deg: float
+    spins: int
+    saturated_share: float
+    states: dict[str, int]
+    special_met: int
+    special_total: int
+    false_success: int
+    checks: dict[str, bool]
+    wall_s: float
+    steps: list[StepReport] = field(default_factory=list)
+
+    @property
+    def passed(self) -> bool:
+        """True when every check passes."""
+        return all(self.checks.values())
+
+
+@dataclass
+class _Trace:
+    """Per-tick records of a run: the step each tick belonged to and what it ended in."""
+
+    step: list[int] = field(default_factory=list)
+    time: list[float] = field(default_factory=list)
+    tip: list[np.ndarray] = field(default_factory=list)
+    base: list[np.ndarray] = field(default_factory=list)
+    angles: list[np.ndarray] = field(default_factory=list)
+    saturated: list[bool] = field(default_factory=list)
+    state: list[str] = field(default_factory=list)
+
+
+def chain_spec(level: Level) -> ChainSpec:
+    """The level's chain and obstacles for the kinematic checks (radians, px)."""
+    links = level.chain.expanded_links
+    limits = [link.limits_rad or (-math.inf, math.inf) for link in links]
+    segments = [(*o.a, *o.b, o.radius) for o in level.obstacles if isinstance(o, SegmentObstacle)]
+    circles = [(*o.center, o.radius) for o in level.obstacles if isinstance(o, CircleObstacle)]
+    return ChainSpec(
+        lengths=np.array([link.length for link in links]),
+        masses=np.array([link.mass for link in links]),
+        widths=np.array([link.width for link in links]),
+        max_torque=np.array([link.max_torque for link in links]),
+        lower=np.array([lo for lo, _ in limits]),
+        upper=np.array([hi for _, hi in limits]),
+        base=np.array(level.chain.base, dtype=float),
+        base_angle=math.radians(level.chain.angle),
+        gravity=np.array(level.world.gravity, dtype=float),
+        segments=np.array(segments, dtype=float).reshape(-1, 5),
+        circles=np.array(circles, dtype=float).reshape(-1, 3),
+    )
+
+
+def stress_levels() -> list[Path]:
+    """Every stress level file, in name order."""
+    return sorted(STRESS_DIR.glob("*.toml"))
+
+
+def load(path: Path, tick_rate: int | None = None) -> Level:
+    """A stress level, at another tick rate if asked (validated again)."""
+    level = ikgame.load_level(path)
+    if tick_rate is None:
+        return level
+    data = level.model_dump(by_alias=True, exclude_none=True)
+    data["world"]["tick_rate"] = tick_rate
+    return Level.model_validate(data)
+
+
+def _record(sim: ikgame.Simulation) -> _Trace:
+    trace = _Trace()
+    while not sim.done:
+        step = sim.script.step_index
+        info = sim.step()
+        if sim.diverged:
+            break
+        points = sim.joint_positions()
+        trace.step.append(step)
+        trace.time.append(info.time)
+        trace.tip.append(points[-1])
+        trace.base.append(points[0])
+        trace.angles.append(sim.joint_angles())
+        trace.saturated.append(bool(np.any(info.torque_limited)))
+        trace.state.append(info.solver_status)
+    return trace
+
+
+def run_one(path: Path, solver: str, tick_rate: int | None = None) -> RunReport:
+    """Run one stress level with one solver and measure it."""
+    level = load(path, tick_rate)
+    spec = chain_spec(level)
+    sim = ikgame.Simulation(level, solver=solver, record=False)
+    start_tip = sim.joint_positions()[-1]
+    wall = time.perf_counter()
+    trace = _record(sim)
+    wall = time.perf_counter() - wall
+    result = sim.result
+    steps = [step for _, step in sim.script.steps]
+    expectations = EXPECTATIONS.get(path.name, {})
+
+    step_of = np.array(trace.step, dtype=int)
+    times = np.array(trace.time)
+    tips = np.array(trace.tip).reshape(-1, 2)
+    angles = np.array(trace.angles).reshape(len(trace.angles), -1)
+    reports: list[StepReport] = []
+    for outcome in result.steps:
+        if outcome.kind == "set":
+            continue
+        ticks = np.flatnonzero(step_of == outcome.index)
+        expect = expectations.get(outcome.index, REACHABLE if outcome.kind == "reach" else "")
+        final_state = trace.state[ticks[-1]] if ticks.size else ""
+        report = StepReport(
+            index=outcome.index,
+            kind=outcome.kind,
+            expect=expect,
+            passed=outcome.passed,
+            time_to_reach=outcome.time_to_reach,
+            overshoot_pct=None,
+            jitter_px=None,
+            jitter_limit_px=None,
+            spins=0,
+            final_state=final_state,
+            expectation_met=None,
+        )
+        reports.append(report)
+        if ticks.size == 0 or outcome.kind == "follow":
+            continue
+        end = times[ticks[-1]]
+        rest = ticks[times[ticks] >= end - REST_WINDOW_S - _EPS]
+        report.jitter_px = rest_jitter(tips[rest])
+        report.jitter_limit_px = (
+            SATURATED_JITTER_PX if expect in (TORQUE_BOUND, JAMMED) else JITTER_PX
+        )
+        if outcome.kind == "wait":
+            report.spins = spin_joints(angles[ticks], SPIN_DEG)
+            continue
+        step = steps[outcome.index]
+        if not isinstance(step, ReachStep):
+            continue
+        target = np.array(step.reach, dtype=float)
+        before = tips[ticks[0] - 1] if ticks[0] > 0 else start_tip
+        if outcome.time_to_reach is not None:
+            held_from = outcome.started + outcome.time_to_reach
+        else:
+            held_from = (outcome.started + end) / 2.0
+        report.spins = spin_joints(angles[ticks[times[ticks] >= held_from - _EPS]], SPIN_DEG)
+        if expect == REACHABLE:
+            report.overshoot_pct = approach_overshoot(tips[ticks], before, target, step.tolerance)
+        elif expect == OUT_OF_REACH:
+            base = trace.base[ticks[-1]]
+            report.expectation_met = (
+                not outcome.reached
+                and final_state == "failure"
+                and stretched_toward(base, tips[ticks[-1]], target, spec.reach, step.tolerance)
+            )
+        elif expect == JAMMED:
+            report.expectation_met = final_state == "blocked"
+        elif expect == TORQUE_BOUND:
+            report.expectation_met = report.jitter_px < SATURATED_JITTER_PX
+    return _summarise(path, solver, result.status, reports, trace, angles, spec, wall)
+
+
+def _summarise(
+    path: Path,
+    solver: str,
+    status: str,
+    reports: list[StepReport],
+    trace: _Trace,
+    angles: np.ndarray,
+    spec: ChainSpec,
+    wall: float,
+) -> RunReport:
+    scored = [r for r in reports if r.expect == REACHABLE or r.kind == "follow"]
+    reached = sum(r.passed for r in scored)
+    times = [r.time_to_reach for r in reports if r.expect == REACHABLE and r.passed]
+    overshoots = [r.overshoot_pct for r in reports if r.overshoot_pct is not None]
+    rested = [r for r in reports if r.jitter_px is not None]
+    special = [r for r in reports if r.expectation_met is not None]
+    false_success = sum(
+        1 for r in reports if r.kind == "reach" and not r.passed and r.final_state == "success"
+    )
+    excursion = limit_excursion_deg(angles, spec.lower, spec.upper)
+    spins = sum(r.spins for r in reports)
+    overshoot = max(overshoots) if overshoots else None
+    checks = {
+        "reached": reached == len(scored) and status != "diverged",
+        "overshoot": overshoot is None or overshoot <= OVERSHOOT_PCT,
+        "jitter": all(r.jitter_px <= r.jitter_limit_px for r in rested),
+        "limits": excursion <= LIMIT_DEG,
+        "spins": spins == 0,
+        "expect": all(r.expectation_met for r in special),
+        "states": false_success == 0,
+    }
+    return RunReport(
+        level=path.name,
+        solver=solver,
+        status=status,
+        reached=reached,
+        reachable=len(scored),
+        mean_time_to_reach=float(np.mean(times)) if times else None,
+        overshoot_pct=overshoot,
+        jitter_px=max(r.jitter_px for r in rested) if rested else None,
+        limit_excursion_deg=excursion,
+        spins=spins,
+        saturated_share=float(np.mean(trace.saturated)) if trace.saturated else 0.0,
+        states=dict(sorted(Counter(r.final_state for r in reports).items())),
+        special_met=sum(bool(r.expectation_met) for r in special),
+        special_total=len(special),
+        false_success=false_success,
+        checks=checks,
+        wall_s=wall,
+        steps=reports,
+    )
+
+
+_COLUMNS: Final = (
+    ("level", "left"),
+    ("solver", "left"),
+    ("reached", "right"),
+    ("t reach s", "right"),
+    ("overshoot %", "right"),
+    ("jitter px", "right"),
+    ("limit deg", "right"),
+    ("spins", "right"),
+    ("sat %", "right"),
+    ("states", "left"),
+    ("fail/jam", "right"),
+    ("run", "left"),
+)
+
+
+def _number(value: float | None, fmt: str) -> str:
+    return "-" if value is None else format(value, fmt)
+
+
+def _states(states: dict[str, int]) -> str:
+    return " ".join(f"{n}{_STATE_LETTERS.get(name, name)}" for name, n in states.items())
+
+
+def table_rows(reports: list[RunReport]) -> list[list[tuple[str, bool | None]]]:
+    """Each run as the cells of the table: (text, passes its threshold or None if not judged)."""
+    rows = []
+    previous = None
+    for r in reports:
+        c = r.checks
+        special = (f"{r.special_met}/{r.special_total}", c["expect"]) if r.special_total else None
+        rows.append(
+            [
+                ("" if r.level == previous else Path(r.level).stem, None),
+                (r.solver, None),
+                (f"{r.reached}/{r.reachable}", c["reached"]),
+                (_number(r.mean_time_to_reach, ".2f"), None),
+                (_number(r.overshoot_pct, ".1f"), c["overshoot"]),
+                (_number(r.jitter_px, ".2f"), c["jitter"]),
+                (f"{r.limit_excursion_deg:.1f}", c["limits"]),
+                (str(r.spins), c["spins"]),
+                (f"{100.0 * r.saturated_share:.0f}", None),
+                (_states(r.states), c["states"]),
+                special or ("-", None),
+                ("pass" if r.passed else "FAIL", r.passed),
+            ]
+        )
+        previous = r.level
+    return rows
+
+
+def summary(reports: list[RunReport]) -> str:
+    """The pass counts of a set of runs."""
+    runs = sum(r.passed for r in reports)
+    checks = sum(sum(r.checks.values()) for r in reports)
+    total = sum(len(r.checks) for r in reports)
+    reached = sum(r.reached for r in reports)
+    return (
+        f"runs passing: {runs}/{len(reports)}   checks passing: {checks}/{total}   "
+        f"targets reached: {reached}/{sum(r.reachable for r in reports)}"
+    )
+
+
+LEGEND: Final = (
+    "states: the solver state each step ended in (s success, p processing, f failure, "
+    "b blocked); fail/jam: unreachable or jammed steps that ended as they should; x: fails "
+    f"its threshold (overshoot <= {OVERSHOOT_PCT:g}%, jitter <= {JITTER_PX:g} px, "
+    f"< {SATURATED_JITTER_PX:g} px torque-bound or jammed, limit <= {LIMIT_DEG:g} deg, "
+    "no spin, no unreached step ending in success)"
+)
+
+
+def render(reports: list[RunReport], console: Console, *, tick_rate: int | None) -> None:
+    """Print the table of stress level x solver, with each run's wall time, and the counts."""
+    rate = "the levels' own tick rate" if tick_rate is None else f"{tick_rate} ticks/s"
+    table = Table(title=f"Motion quality in the physics world ({rate})", title_justify="left")
+    for name, justify in (*_COLUMNS, ("wall s", "right")):
+        table.add_column(name, justify=justify, no_wrap=True)
+    for report, row in zip(reports, table_rows(reports), strict=True):
+        cells = [
+            text if ok is None else f"[green]{text}[/]" if ok else f"[red]{text} x[/]"
+            for text, ok in row
+        ]
+        table.add_row(*cells, f"{report.wall_s:.1f}")
+    console.print(table)
+    console.print(summary(reports))
+    console.print(LEGEND)
+
+
+def markdown(reports: list[RunReport]) -> str:
+    """The table as Markdown, without wall times, so it is the same on every run."""
+    align = {"left": ":---", "right": "---:"}
+    lines = [
+        "| " + " | ".join(name for name, _ in _COLUMNS) + " |",
+        "|" + "|".join(align[justify] for _, justify in _COLUMNS) + "|",
+    ]
+    for row in table_rows(reports):
+        cells = [text if ok is not False else f"{text} x" for text, ok in row]
+        lines.append("| " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n\n" + summary(reports) + "\n\n" + LEGEND + "\n"
+
+
+def _job(args: tuple[str, str, int | None]) -> RunReport:
+    path, solver, tick_rate = args
+    return run_one(Path(path), solver, tick_rate)
+
+
+def _pick_levels(names: list[str] | None, quick: bool) -> tuple[list[Path], list[str]]:
+    """The stress levels asked for (each name a part of a file name), and names matching none."""
+    paths = stress_levels()
+    if quick:
+        paths = [p for p in paths if p.name in QUICK]
+    if not names:
+        return paths, []
+    missing = [n for n in names if not any(n in p.name for p in paths)]
+    return [p for p in paths if any(n in p.name for n in names)], missing
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--levels", nargs="+", metavar="NAME", help="stress levels (name parts)")
+    parser.add_argument("--solvers", nargs="+", choices=SOLVER_NAMES, default=list(SOLVER_NAMES))
+    parser.add_argument("--tick-rate", type=int, help="override every level's tick rate")
+    parser.add_argument("--quick", action="store_true", help="a subset of six levels")
+    parser.add_argument("--jobs", type=int, default=1, help="runs in parallel (processes)")
+    parser.add_argument("--json", type=Path, metavar="OUT", help="write every measure here")
+    parser.add_argument("--markdown", type=Path, metavar="OUT", help="write the table as Markdown")
+    args = parser.parse_args(argv)
+    paths, missing = _pick_levels(args.levels, args.quick)
+    if missing:
+        parser.error(f"no stress level matches {', '.join(missing)} (see {STRESS_DIR})")
+    for path in paths:
+        try:
+            load(path, args.tick_rate)
+        except ValidationError as exc:
+            parser.error(f"{path.name} at --tick-rate {args.tick_rate}: {exc.errors()[0]['msg']}")
+    jobs = [(str(p), s, args.tick_rate) for p in paths for s in args.solvers]
+    started = time.perf_counter()
+    err = Console(stderr=True)
+    if args.jobs > 1:
+        with ProcessPoolExecutor(args.jobs) as pool:
+            reports = list(pool.map(_job, jobs))
+    else:
+        reports = []
+        for i, job in enumerate(jobs, 1):
+            reports.append(_job(job))
+            err.print(f"[{i}/{len(jobs)}] {Path(job[0]).stem} {job[1]}: {reports[-1].wall_s:.1f} s")
+    total = time.perf_counter() - started
+    console = Console(width=170, highlight=False)
+    render(reports, console, tick_rate=args.tick_rate)
+    console.print(f"wall time: {total:.0f} s for {len(reports)} runs")
+    if args.json is not None:
+        data = {
+            "tick_rate": args.tick_rate,
+            "runs": [asdict(r) | {"passed": r.passed} for r in reports],
+        }
+        args.json.write_text(json.dumps(data, indent=1) + "\n")
+    if args.markdown is not None:
+        args.markdown.write_text(markdown(reports))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,66 @@
+"""Noticing a jammed chain: the solver has not given the target up, the end effector stops
+getting closer, and the chain is pushing (a motor at its torque limit, or a link against an
+obstacle or a prop).
+
+A solver that re-solves from the measured pose every tick keeps reporting ``success`` (or
+``processing``) for an answer the chain can never move to when something is in the way; this
+watch turns that into the ``blocked`` state. Its documented response (see :class:`~ikgame.control.controller.Controller`)
+is to stop pushing and hold the pose until the target moves.
+
+Times are s, distances px.
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from typing import Final
+
+__all__ = ["BlockWatch"]
+
+WINDOW: Final = 0.5
+"""How long the end effector must have made no progress, s."""
+
+PROGRESS: Final = 1.0
+"""An error that stays within a band this wide over the window makes no progress, px."""
+
+NEAR: Final = 2.0
+"""Within this many arrival distances of the target nothing counts as blocked."""
+
+
+class BlockWatch:
+    """Watches one chain's progress toward its target, tick by tick.
+
+    >>> watch = BlockWatch(dt=0.1, arrival=0.5)
+    >>> [watch.observe(error=40.0, reachable=True, pushing=True) for _ in range(7)][-1]
+    True
+    >>> watch.observe(error=20.0, reachable=True, pushing=True)  # getting closer again
+    False
+    """
+
+    def __init__(self, *, dt: float, arrival: float) -> None:
+        if not dt > 0:
+            raise ValueError(f"dt must be a positive number of seconds, got {dt!r}")
+        self._errors: deque[float] = deque(maxlen=max(2, round(WINDOW / dt) + 1))
+        self._pushes: deque[bool] = deque(maxlen=self._errors.maxlen)
+        self._near = max(NEAR * arrival, 1.0)
+
+    def reset(self) -> None:
+        """Forget the history: the target moved, so progress is measured afresh."""
+        self._errors.clear()
+        self._pushes.clear()
+
+    def observe(self, *, error: float, reachable: bool, pushing: bool) -> bool:
+        """Record one tick and say whether the chain is blocked now.
+
+        ``error`` is the end effector's distance to the target (px), ``reachable`` whether the
+        solver has not given the target up as out of reach, ``pushing`` whether a motor was at its torque limit
+        or a link touched something this tick.
+        """
+        self._errors.append(error)
+        self._pushes.append(pushing)
+        if not reachable or error <= self._near or len(self._errors) < self._errors.maxlen:
+            return False
+        # Stuck means the error has stayed within one band for the whole window: a target that
+        # has just jumped away, or a chain bouncing off something, moves the error a lot.
+        stuck = max(self._errors) - min(self._errors) < PROGRESS
+        return stuck and sum(self._pushes) * 2 >= len(self._pushes)

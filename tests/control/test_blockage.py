@@ -1,0 +1,54 @@
+"""The block watch on made-up error traces, and a jammed arm in the physics world."""
+
+import numpy as np
+
+from ikgame.control.blockage import BlockWatch
+from ikgame.level.model import Level
+from ikgame.sim import Simulation
+
+
+def _run(watch, errors, *, reachable=True, pushing=True):
+    return [watch.observe(error=e, reachable=reachable, pushing=pushing) for e in errors]
+
+
+def test_no_progress_while_pushing_is_blocked_after_the_window():
+    flags = _run(BlockWatch(dt=0.01, arrival=0.5), [50.0] * 60)
+    assert not any(flags[:50]) and all(flags[51:])
+
+
+def test_progress_a_free_chain_a_given_up_target_or_arrival_are_not_blocked():
+    assert not any(_run(BlockWatch(dt=0.01, arrival=0.5), np.linspace(200, 30, 120)))
+    assert not any(_run(BlockWatch(dt=0.01, arrival=0.5), [50.0] * 120, pushing=False))
+    assert not any(_run(BlockWatch(dt=0.01, arrival=0.5), [50.0] * 120, reachable=False))
+    assert not any(_run(BlockWatch(dt=0.01, arrival=0.5), [0.8] * 120))
+
+
+def test_a_target_that_jumps_away_is_not_lost_ground():
+    errors = [0.5] * 30 + list(np.linspace(300, 200, 60))
+    assert not any(_run(BlockWatch(dt=0.01, arrival=0.5), errors))
+
+
+def test_a_jammed_arm_reports_blocked_holds_and_tries_again_when_the_target_moves():
+    level = Level.model_validate(
+        {
+            "level": {"name": "jam", "duration": 8.0},
+            "world": {"gravity": [0.0, 0.0]},
+            "chain": {"angle": 0.0, "links": [{"length": 100.0, "repeat": 2}]},
+            # A post right on the straight path of the tip to a point behind it.
+            "obstacles": [{"kind": "circle", "center": [120.0, 120.0], "radius": 25.0}],
+            "script": [
+                {"reach": [150.0, 150.0], "timeout": 3.0},
+                {"reach": [0.0, -150.0], "timeout": 3.0},
+            ],
+        }
+    )
+    sim = Simulation(level, record=False)
+    states = []
+    while not sim.done:
+        states.append((sim.script.step_index, sim.step().solver_status))
+    first = [s for i, s in states if i == 0]
+    assert "blocked" in first and first[-1] == "blocked"
+    assert [s for i, s in states if i == 1][-1] == "success"
+    steps = sim.result.steps
+    assert not steps[0].passed and "blocked" in steps[0].note
+    assert steps[1].passed and steps[1].note == ""

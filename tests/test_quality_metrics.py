@@ -1,0 +1,144 @@
+"""The motion-quality measures (benchmarks/_quality_metrics.py) on synthetic trajectories."""
+
+import dataclasses
+import doctest
+import importlib
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+metrics = importlib.import_module("_quality_metrics")
+
+
+def test_the_module_examples_hold():
+    assert doctest.testmod(metrics).failed == 0
+
+
+def _approach(overshoot_px: float, distance: float = 200.0, ticks: int = 480) -> np.ndarray:
+    """A tip moving along +x from 0 to ``distance``: an under-damped step response whose first
+    peak passes the target by ``overshoot_px`` (none when 0), sampled at 240 ticks/s."""
+    t = np.arange(1, ticks + 1) / 240.0
+    if overshoot_px == 0.0:
+        x = distance * (1.0 - np.exp(-12.0 * t))
+    else:
+        zeta = -math.log(overshoot_px / distance) / math.hypot(
+            math.pi, math.log(overshoot_px / distance)
+        )
+        wn = 20.0
+        wd = wn * math.sqrt(1.0 - zeta**2)
+        envelope = np.exp(-zeta * wn * t)
+        x = distance * (
+            1.0 - envelope * (np.cos(wd * t) + zeta / math.sqrt(1 - zeta**2) * np.sin(wd * t))
+        )
+    return np.column_stack((x, np.zeros_like(x)))
+
+
+def test_overshoot_is_the_first_peak_past_the_target_as_a_share_of_the_approach():
+    target = np.array([200.0, 0.0])
+    assert metrics.approach_overshoot(_approach(0.0), np.zeros(2), target, 6.0) == 0.0
+    measured = metrics.approach_overshoot(_approach(10.0), np.zeros(2), target, 6.0)
+    assert abs(measured - 5.0) < 0.05
+
+
+def test_overshoot_looks_along_the_approach_only():
+    # Sideways drift at the target is not overshoot; moving past it along the approach is.
+    tips = np.array([[0.0, 0.0], [0.0, 95.0], [4.0, 100.0], [0.0, 103.0]])
+    target = np.array([0.0, 100.0])
+    assert metrics.approach_overshoot(tips, np.zeros(2), target, 6.0) == 3.0
+    assert metrics.approach_overshoot(tips[:2] * 0.5, np.zeros(2), target, 6.0) is None
+    assert metrics.approach_overshoot(tips, np.array([0.0, 97.0]), target, 6.0) is None
+
+
+def test_rest_jitter_is_the_spread_about_the_mean():
+    t = np.linspace(0.0, 0.5, 120, endpoint=False)
+    still = np.tile([30.0, 40.0], (120, 1))
+    assert metrics.rest_jitter(still) == 0.0
+    circle = np.column_stack((30 + 2 * np.cos(8 * np.pi * t), 40 + 2 * np.sin(8 * np.pi * t)))
+    assert abs(metrics.rest_jitter(circle) - 2.0) < 1e-6
+
+
+def test_limit_excursion_counts_only_what_lies_past_a_limit():
+    angles = np.radians([[0.0, 170.0, -50.0], [12.5, -200.0, 60.0], [-9.0, 0.0, 61.0]])
+    lower = np.radians([-10.0, -math.inf, -60.0])
+    upper = np.radians([10.0, math.inf, 60.0])
+    assert abs(metrics.limit_excursion_deg(angles, lower, upper) - 2.5) < 1e-9
+    assert metrics.limit_excursion_deg(angles[:, 1:2], lower[1:2], upper[1:2]) == 0.0
+
+
+def test_a_joint_spins_when_it_turns_through_more_than_half_a_turn():
+    t = np.linspace(0.0, 1.0, 241)[:, None]
+    wobble = 0.3 * np.sin(20 * t)
+    assert metrics.spin_joints(np.hstack((wobble, wobble))) == 0
+    assert metrics.spin_joints(np.hstack((wobble, 2 * np.pi * t, -3.3 * t))) == 2
+
+
+def test_stretched_toward_wants_the_tip_at_the_nearest_point_of_reach():
+    base, target = np.array([10.0, 0.0]), np.array([310.0, 400.0])
+    nearest = base + np.array([0.6, 0.8]) * 360.0
+    assert metrics.stretched_toward(base, nearest, target, 360.0, 6.0)
+    assert not metrics.stretched_toward(base, nearest - [0.0, 20.0], target, 360.0, 6.0)
+    assert not metrics.stretched_toward(
+        base, base + np.array([0.8, 0.6]) * 360.0, target, 360.0, 6.0
+    )
+
+
+def _spec(n: int = 4) -> object:
+    rng = np.random.default_rng(3)
+    return metrics.ChainSpec(
+        lengths=rng.uniform(20.0, 80.0, n),
+        masses=rng.uniform(0.5, 2.0, n),
+        widths=np.full(n, 10.0),
+        max_torque=np.full(n, 1e6),
+        lower=np.full(n, -np.pi),
+        upper=np.full(n, np.pi),
+        base=np.array([5.0, -3.0]),
+        base_angle=0.7,
+        gravity=np.array([120.0, -900.0]),
+        segments=np.zeros((0, 5)),
+        circles=np.zeros((0, 3)),
+    )
+
+
+def test_gravity_torque_is_the_slope_of_the_potential_energy():
+    spec = _spec()
+    pose = np.random.default_rng(4).uniform(-2.0, 2.0, 4)
+
+    def energy(angles: np.ndarray) -> float:
+        points = metrics.chain_points(spec, angles)
+        com = (points[:-1] + points[1:]) / 2.0
+        return float(-(spec.masses[:, None] * com * spec.gravity).sum())
+
+    h = 1e-6
+    slope = [(energy(pose + h * e) - energy(pose - h * e)) / (2 * h) for e in np.eye(4)]
+    torques = metrics.gravity_torques(spec, metrics.chain_points(spec, pose))
+    np.testing.assert_allclose(torques, np.abs(slope), rtol=1e-5, atol=1e-3)
+
+
+def test_clearance_sees_a_link_crossing_an_obstacle():
+    spec = dataclasses.replace(
+        _spec(1), base=np.zeros(2), base_angle=0.0, lengths=np.array([100.0])
+    )
+    points = metrics.chain_points(spec, np.zeros(1))
+    wall = dataclasses.replace(spec, segments=np.array([[50.0, -40.0, 50.0, 40.0, 2.0]]))
+    assert metrics.obstacle_clearance(wall, points) < 0.0
+    beside = dataclasses.replace(spec, segments=np.array([[0.0, 20.0, 100.0, 20.0, 2.0]]))
+    assert abs(metrics.obstacle_clearance(beside, points) - 13.0) < 1e-9
+    disc = dataclasses.replace(spec, circles=np.array([[120.0, 0.0, 10.0]]))
+    assert abs(metrics.obstacle_clearance(disc, points) - 5.0) < 1e-9
+
+
+def test_a_witness_respects_limits_torque_and_obstacles():
+    spec = dataclasses.replace(
+        _spec(3), gravity=np.zeros(2), lower=np.full(3, -0.5), upper=np.full(3, 0.5)
+    )
+    reachable = metrics.chain_points(spec, np.array([0.4, -0.3, 0.2]))[-1]
+    pose = metrics.find_witness(spec, reachable, 4.0)
+    assert pose is not None and np.all(np.abs(pose) <= 0.5)
+    # Beyond the limits (the chain would have to bend back on itself) there is none.
+    behind = metrics.chain_points(spec, np.array([2.5, 0.0, 0.0]))[-1]
+    assert metrics.find_witness(spec, behind, 4.0) is None
+    weak = dataclasses.replace(spec, gravity=np.array([0.0, -900.0]), max_torque=np.full(3, 1.0))
+    assert metrics.find_witness(weak, reachable, 4.0) is None
