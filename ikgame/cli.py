@@ -471,7 +471,8 @@ def _cmd_check(args: argparse.Namespace) -> int:
     try:
         recorded = json.loads(args.results.read_text(encoding="utf-8"))
         rerun, prov = recorded["rerun"], recorded["provenance"]
-        options = argparse.Namespace(**rerun, workers=None)
+        # Options a results.json from an older ikgame does not record take their defaults.
+        options = argparse.Namespace(**({"mp4": False} | rerun), workers=None)
     except (OSError, UnicodeDecodeError, ValueError, KeyError, TypeError) as exc:
         raise UsageError(
             f"{args.results}: not the results.json of an ikgame run ({_text(exc)})"
