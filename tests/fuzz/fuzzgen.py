@@ -30,6 +30,8 @@ MAX_LINKS = 12
 MAX_DURATION = 2.0  # s
 MAX_TICK_RATE = 480
 MAX_ITERATIONS = 20
+_SPRITES = ("sprites/ball.png", "sprites/claw.png")
+"""Sprites shipped in assets/, which any level may name."""
 _TEXTS = ("x", "ball", "A level", ":100: [bold]red[/] :1234:", "ünï cödé", "b[/]", "p")
 
 
@@ -59,6 +61,13 @@ def generated_level(rng: random.Random) -> dict[str, Any]:
     level["level"]["theme"] = rng.choice(["dark", "light", None])
     if level["level"]["theme"] is None:
         del level["level"]["theme"]
+    # A sprite names a file: a shipped one from assets/ now and then, else none.
+    for body in [*level["chain"]["links"], *props]:
+        if "sprite" in body and rng.random() < 0.3:
+            body["sprite"] = rng.choice(_SPRITES)
+        elif not ("sprite" in body and rng.random() < 0.1):  # a few name a missing file
+            for key in ("sprite", "sprite_pivot", "sprite_scale"):
+                body.pop(key, None)
     if rng.random() < 0.5:  # a chain of one material, as most levels have
         for link in level["chain"]["links"]:
             link["mass"] = level["chain"]["links"][0].get("mass", 1.0)
