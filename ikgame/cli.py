@@ -43,7 +43,7 @@ from ikgame.level.loader import (
 from ikgame.level.model import SOLVER_NAMES, Level
 from ikgame.level.tools import level_rows, schema_text, validate_files
 from ikgame.provenance import differences, file_sha256, output_hashes, provenance
-from ikgame.render.export import export_run, parse_size
+from ikgame.render.export import export_run, parse_size, write_motion
 from ikgame.render.theme import Theme, ThemeError, available_themes, load_theme
 from ikgame.render.video import check_video
 from ikgame.sim import RunResult, Simulation
@@ -201,7 +201,11 @@ def _parser() -> argparse.ArgumentParser:
         choices=SOLVER_NAMES,
         help="IK solver, overriding the level's own choice",
     )
-    run.add_argument("--no-frames", action="store_true", help="write results only, no pictures")
+    run.add_argument(
+        "--no-frames",
+        action="store_true",
+        help="write results.json and motion.json only, no pictures",
+    )
     run.add_argument("--no-gif", action="store_true", help="skip run.gif")
     run.add_argument("--apng", action="store_true", help="also write run.png, an animated PNG")
     run.add_argument("--sheet", action="store_true", help="also write sheet.png, a contact sheet")
@@ -370,14 +374,16 @@ def _run_into(
     """Simulate, export and write results.json last; a stop on the way leaves no results.json
     (and says so)."""
     try:
-        sim = Simulation(level, solver=args.solver, record=not args.no_frames)
+        # Frames are recorded even without pictures: motion.json is written either way.
+        sim = Simulation(level, solver=args.solver)
         # Sprites are decoded before the run, so an image that cannot be used stops it at once.
         scene = sim.scene if args.no_frames else skin_scene(sim.scene, level, level_path)
         enabled = _interactive(console)
         with progress_bar("simulating", 1.0, enabled=enabled, console=console) as update:
             result = sim.run(update)
-        written: list[Path] = []
-        if not args.no_frames:
+        if args.no_frames:
+            written = [write_motion(out, scene, sim.snapshots)]
+        else:
             written = export_run(
                 out,
                 scene,
@@ -700,7 +706,11 @@ def _live_commands(sub: argparse._SubParsersAction) -> None:
     watch.add_argument("level", metavar="LEVEL", help="a level file or shipped name")
     _output_options(watch, "output folder (default: runs/<level>)")
     watch.add_argument("--solver", choices=SOLVER_NAMES, help="IK solver, as for run")
-    watch.add_argument("--no-frames", action="store_true", help="write results only, no pictures")
+    watch.add_argument(
+        "--no-frames",
+        action="store_true",
+        help="write results.json and motion.json only, no pictures",
+    )
     watch.set_defaults(handler=_cmd_watch)
 
 

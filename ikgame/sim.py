@@ -327,6 +327,7 @@ class Simulation:
         for change in changes:
             if change.gravity is not None:
                 self.world.set_gravity(change.gravity)
+                self.controller.servo.retry()
             if change.solver is not None and not self._solver_pinned:
                 self.controller.set_solver(change.solver)
             if change.gain is not None:

@@ -30,6 +30,10 @@ def test_run_writes_results_and_exits_zero(tmp_path, capsys):
     assert data["status"] == "passed"
     assert all(step["final_error"] <= 6.0 for step in data["steps"])
     assert "passed" in capsys.readouterr().out
+    # The trajectory comes without pictures too: tuning motion needs no rendering.
+    motion = json.loads((out / "motion.json").read_text())
+    assert len(motion["frames"]) == round(data["sim_time"] * motion["fps"])
+    assert not (out / "frames").exists() and not (out / "run.gif").exists()
 
 
 def test_two_runs_write_byte_identical_results(tmp_path):
@@ -315,7 +319,7 @@ def test_force_clears_the_earlier_run_first_and_keeps_other_files(tmp_path):
     (out / "notes.txt").write_text("mine")
     (out / ".run.gif.0123456789ab.tmp").write_bytes(b"left by a killed run")
     assert main([*args, "--force", "--no-frames"]) == 0
-    assert sorted(p.name for p in out.iterdir()) == ["notes.txt", "results.json"]
+    assert sorted(p.name for p in out.iterdir()) == ["motion.json", "notes.txt", "results.json"]
 
 
 def test_check_reproduces_a_run_and_reports_a_difference(tmp_path, capsys):

@@ -186,6 +186,12 @@ class Controller:
             return Command(solution, rates)
         if velocities is None or dt is None:
             raise ValueError("a controller with a servo needs the joint velocities and dt")
+        moved = target is not None and (
+            self._last_target is None or np.any(target != self._last_target)
+        )
+        if moved:
+            # The goal may be within the torque budget now: stalled joints try again.
+            self.servo.retry()
         world_angles = np.cumsum(measured) + self.skeleton.base_angle
         drive = self.servo.command(
             error, world_angles, velocities, gravity, dt, self._goal_rates(measured, target, dt)

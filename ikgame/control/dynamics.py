@@ -140,11 +140,14 @@ class Drive:
         accelerations: (n,) joint accelerations (child relative to parent), rad/s^2.
         loads: the joint torques (within the limits) and pivot forces of that motion.
         saturated: (n,) bool, joints whose torque sits at its limit.
+        consistent: whether the loads are exactly those of the motion (False when no motion
+            fit the limits and the physics engine is left to find one).
     """
 
     accelerations: np.ndarray
     loads: JointLoads
     saturated: np.ndarray
+    consistent: bool = True
 
 
 def plan_drive(
@@ -181,6 +184,7 @@ def plan_drive(
     full = inverse_dynamics(chain, world_angles, omega, np.cumsum(wanted), gravity)
     if np.all(np.abs(full.torques) <= limit):
         return Drive(wanted, full, np.zeros(chain.count, dtype=bool))
+    consistent = True
     bias = inverse_dynamics(chain, world_angles, omega, np.zeros(chain.count), gravity)
     slope = full.torques - bias.torques
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -199,7 +203,7 @@ def plan_drive(
             full.inertia,
         )
     else:
-        accelerations = wanted
+        accelerations, consistent = wanted, False
         loads = JointLoads(np.clip(bias.torques, -limit, limit), bias.forces, bias.inertia)
     saturated = np.abs(loads.torques) >= limit * (1.0 - 1e-9)
-    return Drive(accelerations, loads, saturated)
+    return Drive(accelerations, loads, saturated, consistent)

@@ -9,7 +9,7 @@ This servo instead:
    is the deceleration the joint's spare torque (its limit less what gravity takes) gives the
    inertia beyond it: a velocity it can still brake from in time;
 2. never asks a joint for a velocity change it cannot make in one tick (``a x dt``), and a
-   joint that is saturated yet carried away from its goal asks only to stop until its goal
+   joint that is saturated yet carried away from its goal asks only to stop until the target
    moves (anti-windup): it comes to rest where its torque runs out instead of swinging there;
 3. turns the wanted velocity change into feed-forward torques and pivot forces with the chain's
    dynamics (:func:`~ikgame.control.dynamics.plan_drive`), within the torque limits, so that the
@@ -31,10 +31,6 @@ import numpy as np
 from ikgame.control.dynamics import ChainInertia, inverse_dynamics, plan_drive
 
 __all__ = ["Servo", "ServoCommand"]
-
-GOAL_MOVED: Final = 0.1
-"""A stalled joint tries again once its goal has moved this far (radians) from where it was
-when the joint stalled."""
 
 BRAKE_SHARE: Final = 0.5
 """Share of a joint's spare torque the velocity profile plans to brake with: the rest is margin
@@ -85,9 +81,13 @@ class Servo:
         self.gain = float(gain)
         count = len(self.max_torque)
         self._stalled = np.zeros(count, dtype=bool)
-        self._stalled_at = np.zeros(count)
         self._saturated = np.zeros(count, dtype=bool)
         self._velocities = np.zeros(count)
+
+    def retry(self) -> None:
+        """Let joints that stalled at their torque limit push for their goals again: the target
+        moved, or the world changed (gravity), so the goal may be within reach now."""
+        self._stalled[:] = False
 
     def command(
         self,
@@ -112,21 +112,16 @@ class Servo:
         reach = spare / hold.inertia
         brake = BRAKE_SHARE * reach
         # Anti-windup: a joint pushing at its limit yet carried away from its goal cannot get
-        # there; it asks only to stop until its goal moves, so it comes to rest where its
-        # torque runs out instead of swinging about that point like a pendulum.
-        # Carried away: moving from the goal, faster than a tick ago, while pushing at the limit.
-        # An overshoot that the motor is braking slows down instead, and is no stall.
-        away = (
+        # there; it asks only to stop, until :meth:`retry`, so it comes to rest where its
+        # torque runs out instead of swinging about that point like a pendulum. Carried away
+        # means moving from the goal faster than a tick ago: an overshoot that the motor is
+        # braking slows down instead, and is no stall.
+        self._stalled |= (
             self._saturated
             & (velocities * error < 0.0)
             & (np.abs(velocities) > np.abs(self._velocities))
         )
         self._velocities = velocities
-        # The goal angle, up to the base's constant mount angle: the error alone also grows as
-        # the joint is carried away, which is not the goal moving.
-        goal = np.diff(world_angles, prepend=0.0) + error
-        self._stalled_at = np.where(away & ~self._stalled, goal, self._stalled_at)
-        self._stalled = (self._stalled | away) & (np.abs(goal - self._stalled_at) <= GOAL_MOVED)
         size = np.where(self._stalled, 0.0, np.abs(error))
         speed = np.minimum(
             np.minimum(self.max_speed, self.gain * size), np.sqrt(2.0 * brake * size)
@@ -147,14 +142,17 @@ class Servo:
         # Approach that velocity no faster than each joint's spare torque allows: a servo that
         # asked for the whole change in one tick would saturate every motor after any knock.
         wanted = np.clip(target, velocities - reach * dt, velocities + reach * dt)
+        wanted_acceleration = (wanted - velocities) / dt
         drive = plan_drive(
-            self.inertia,
-            world_angles,
-            still,
-            (wanted - velocities) / dt,
-            gravity,
-            self.max_torque,
+            self.inertia, world_angles, omega, wanted_acceleration, gravity, self.max_torque
         )
+        if not drive.consistent:
+            # Moving faster than the motors can hold (after a knock, say): feeding forward the
+            # swing's own loads, clipped, would fight the pivots and fling a long chain apart.
+            # Gravity and the wanted acceleration alone, and pymunk's pivots find the rest.
+            drive = plan_drive(
+                self.inertia, world_angles, still, wanted_acceleration, gravity, self.max_torque
+            )
         self._saturated = drive.saturated
         return ServoCommand(
             rates=velocities + drive.accelerations * dt,

@@ -44,7 +44,7 @@ from ikgame.render.theme import Theme, load_theme
 from ikgame.render.video import Mp4Writer, check_video, even_size
 from ikgame.snapshot import Scene, Snapshot
 
-__all__ = ["check_out_dir", "export_run", "motion_json", "parse_size", "trail_at"]
+__all__ = ["check_out_dir", "export_run", "motion_json", "parse_size", "trail_at", "write_motion"]
 
 MIN_SIDE = 16  # px: below this the HUD and markers cannot fit
 MAX_SIDE = 3840  # px, either side
@@ -490,10 +490,22 @@ def export_run(
     if sheet:
         written.append(write_atomic(out / "sheet.png", _png_bytes(_contact_sheet(job, samples))))
     if motion:
-        with atomic_open(out / "motion.json") as handle:
-            _write_motion(handle, scene, snapshots)
-        written.append(out / "motion.json")
+        written.append(write_motion(out, scene, snapshots))
     return written
+
+
+def write_motion(
+    out_dir: str | os.PathLike[str], scene: Scene, snapshots: Sequence[Snapshot]
+) -> Path:
+    """Write ``motion.json`` (see :func:`motion_json`) into ``out_dir`` and return its path:
+    the baked motion on its own, for a run that draws no pictures."""
+    snapshots = tuple(snapshots)
+    _check_run(scene, snapshots)
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    with atomic_open(out / "motion.json") as handle:
+        _write_motion(handle, scene, snapshots)
+    return out / "motion.json"
 
 
 def _write_frames(
