@@ -1,7 +1,9 @@
 """The ``ikgame`` command line: run levels, and (as they come) validate, list and compare them.
 
 Exit codes: 0 when the command did its job (a level that fails its script still ran fine),
-2 for bad input (a level file, an option), 1 for an internal error.
+2 for bad input (a level file, an option, an output folder that cannot be written), 1 for an
+internal error; 130 / 143 when stopped by Ctrl-C / SIGTERM; ``check`` exits 3 when a run does not
+reproduce. User text (file names, level values) is printed as written, never read as markup.
 
 Start-up time is most of a short command's time, so this module imports at the top only what
 building the parser needs; each command imports its own modules (the simulation, Pillow, rich,
@@ -11,17 +13,26 @@ the comparison) when it runs, and ``ikgame --version`` loads none of them.
 from __future__ import annotations
 
 import argparse
+import errno
+import json
+import math
 import re
+import signal
 import sys
+import tempfile
 import threading
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
+from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 import ikgame
+from ikgame._files import prepare_out_dir, remove_temporaries, write_atomic, write_json
+from ikgame.budget import DEFAULT_BUDGET_MINUTES, RunEstimate, estimate_run
 from ikgame.level.library import DEFAULT_LEVEL, resolve_level
 from ikgame.level.names import SOLVER_NAMES
-from ikgame.render.theme import available_themes
+from ikgame.render.theme import Theme, ThemeError, available_themes, load_theme
 
 if TYPE_CHECKING:
     from rich.console import Console
@@ -31,7 +42,12 @@ if TYPE_CHECKING:
 
 __all__ = ["main"]
 
-EXIT_OK, EXIT_INTERNAL, EXIT_BAD_INPUT = 0, 1, 2
+EXIT_OK, EXIT_INTERNAL, EXIT_BAD_INPUT, EXIT_NOT_REPRODUCED = 0, 1, 2, 3
+EXIT_INTERRUPTED, EXIT_TERMINATED = 130, 143
+_DISK_ERRORS = frozenset(
+    {errno.ENOSPC, errno.EDQUOT, errno.EROFS, errno.EACCES, errno.EPERM, errno.EISDIR}
+)
+"""Errors of the file system a user can fix: reported as bad input, not as a bug."""
 
 _DESCRIPTION = """\
 ikgame: a 2D physics sandbox for procedural animation.
@@ -54,7 +70,11 @@ writes into DIR:
   motion.json    baked motion: per frame every joint's angle and position, for a game engine
   run.png        an animated PNG (with --apng)     sheet.png  a contact sheet (with --sheet)
   run.mp4        H.264 video at the level's fps (with --mp4; needs: pip install 'ikgame[video]')
-exit codes: 0 the run completed (whatever its status), 2 bad input, 1 internal error.
+before it starts, a run's cost is estimated from the level (ticks x links x iterations,
+obstacles, props, frames x pixels); above --budget (default 30 minutes) it is refused.
+
+exit codes: 0 the run completed (whatever its status), 2 bad input, 1 internal error,
+130 / 143 stopped by Ctrl-C / SIGTERM (no results.json is written then).
 """
 
 
@@ -62,42 +82,94 @@ class UsageError(ValueError):
     """Bad input from the command line: reported in one line, exit code 2."""
 
 
+class _Terminated(KeyboardInterrupt):
+    """SIGTERM, raised like Ctrl-C so that every ``finally`` and ``except BaseException``
+    cleans up the same way."""
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line with ``argv`` (default: ``sys.argv[1:]``); returns the exit code."""
     parser = _parser()
     args = parser.parse_args(argv)
-    try:
-        return args.handler(args)
-    except (Exception, KeyboardInterrupt) as exc:
-        return _report(exc, debug=getattr(args, "debug", False))
+    err = _console(stderr=True)
+    with _sigterm_raises():
+        return _handle(args, err)
 
 
-def _report(exc: BaseException, *, debug: bool) -> int:
-    """Print what went wrong on stderr and return the exit code; re-raise with ``debug``."""
-    from rich.console import Console
+def _handle(args: argparse.Namespace, err: Console) -> int:
     from rich.markup import escape
 
     from ikgame.level.loader import LevelError
 
-    err = Console(stderr=True, highlight=False)
-    if isinstance(exc, LevelError):
+    try:
+        return args.handler(args)
+    except LevelError as exc:
         for problem in exc.problems:
             err.print(f"[bold red]error:[/] {escape(str(problem))}", soft_wrap=True)
         return EXIT_BAD_INPUT
-    if isinstance(exc, UsageError):
+    except UsageError as exc:
         err.print(f"[bold red]error:[/] {escape(str(exc))}", soft_wrap=True)
         return EXIT_BAD_INPUT
-    if isinstance(exc, KeyboardInterrupt):
-        err.print("interrupted")
-        return 130
-    # The last line of defence: report, never a bare traceback.
-    if debug:
+    except KeyboardInterrupt as exc:
+        what = "terminated (SIGTERM)" if isinstance(exc, _Terminated) else "interrupted"
+        notes = "; ".join(getattr(exc, "__notes__", ())) or "nothing was written"
+        err.print(escape(f"{what}: {notes}"), soft_wrap=True)
+        return EXIT_TERMINATED if isinstance(exc, _Terminated) else EXIT_INTERRUPTED
+    except OSError as exc:
+        if exc.errno not in _DISK_ERRORS or getattr(args, "debug", False):
+            return _internal(args, err, exc)
+        where = f" {exc.filename}" if exc.filename else ""
+        message = escape(f"cannot write{where}: {exc.strerror}")
+        err.print(f"[bold red]error:[/] {message}", soft_wrap=True)
+        return EXIT_BAD_INPUT
+    except Exception as exc:  # the last line of defence: report, never a bare traceback
+        return _internal(args, err, exc)
+
+
+def _internal(args: argparse.Namespace, err: Console, exc: Exception) -> int:
+    from rich.markup import escape
+
+    if getattr(args, "debug", False):
         raise exc
     err.print(
-        f"[bold red]internal error:[/] {type(exc).__name__}: {escape(str(exc))}", soft_wrap=True
+        f"[bold red]internal error:[/] {type(exc).__name__}: {escape(_text(exc))}", soft_wrap=True
     )
     err.print("rerun with --debug for the traceback, and please report it.")
     return EXIT_INTERNAL
+
+
+def _text(exc: BaseException) -> str:
+    """``str(exc)``, or its type's name when even that fails."""
+    try:
+        return str(exc)
+    except Exception:  # a message that cannot be made (e.g. an int too long to print)
+        return type(exc).__name__
+
+
+def _console(*, stderr: bool = False, quiet: bool = False) -> Console:
+    """A console that prints text as written: no emoji codes (``:100:``), no highlighting;
+    markup only in the literals of this module, user text always goes through ``escape``."""
+    from rich.console import Console
+
+    return Console(stderr=stderr, quiet=quiet, highlight=False, emoji=False)
+
+
+@contextmanager
+def _sigterm_raises() -> Iterator[None]:
+    """While the command runs, SIGTERM stops it like Ctrl-C (cleanly, files closed)."""
+
+    def stop(signum: int, frame: object) -> None:
+        raise _Terminated()
+
+    try:
+        previous = signal.signal(signal.SIGTERM, stop)
+    except ValueError:  # not the main thread: leave signals alone
+        yield
+        return
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -154,6 +226,7 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument(
         "--workers", type=int, metavar="N", help="processes drawing frames (default: automatic)"
     )
+    _budget_options(run)
     run.add_argument(
         "--png-compression",
         type=int,
@@ -163,6 +236,26 @@ def _parser() -> argparse.ArgumentParser:
         help="zlib level 0..9 of the PNG files: 1 (default) is fast, 9 makes them smaller",
     )
     run.set_defaults(handler=_cmd_run)
+
+    check = sub.add_parser(
+        "check",
+        help="run a recorded run again and report whether it reproduces exactly",
+        description="Read a results.json, run the same level with the same options again (in a "
+        "temporary folder) and compare: the outcome, every number, and the hash of every file "
+        "written (frames included). The level file must be unchanged.",
+        epilog="example:\n  ikgame check runs/first-reach/results.json\n\n"
+        "exit codes: 0 reproduced exactly, 3 it did not (the differences are listed), "
+        "2 bad input.",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    check.add_argument("results", metavar="RESULTS", type=Path, help="a results.json")
+    check.add_argument(
+        "--level", metavar="LEVEL", help="the level file, if it has moved since the run"
+    )
+    check.add_argument("--quiet", action="store_true", help="print nothing but the verdict")
+    check.add_argument("--debug", action="store_true", help="show tracebacks of internal errors")
+    _budget_options(check)
+    check.set_defaults(handler=_cmd_check)
 
     compare = sub.add_parser(
         "compare",
@@ -175,6 +268,7 @@ def _parser() -> argparse.ArgumentParser:
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     compare.add_argument("level", nargs="?", metavar="LEVEL", help="a level file or shipped name")
+    _budget_options(compare)
     compare.add_argument(
         "--solvers",
         default=",".join(SOLVER_NAMES),
@@ -224,89 +318,126 @@ def _output_options(parser: argparse.ArgumentParser, out_help: str) -> None:
     parser.add_argument("--debug", action="store_true", help="show tracebacks of internal errors")
 
 
+def _budget_options(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "--budget",
+        type=_minutes,
+        default=DEFAULT_BUDGET_MINUTES,
+        metavar="MINUTES",
+        help=f"refuse a run estimated to take longer (default: {DEFAULT_BUDGET_MINUTES:g})",
+    )
+    parser.add_argument(
+        "--no-budget", action="store_true", help="run whatever the estimate (see --budget)"
+    )
+
+
+def _minutes(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number of minutes: {text!r}") from None
+    if not (math.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"must be a positive number of minutes, got {text!r}")
+    return value
+
+
 def _slug(name: str) -> str:
     return re.sub(r"[^a-z0-9]+", "-", name.lower()).strip("-") or "level"
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
-    from rich.console import Console
-
-    from ikgame._files import write_json
-    from ikgame._progress import progress_bar
-    from ikgame.level.loader import load_level
-    from ikgame.render.output import check_out_dir, parse_size
-    from ikgame.render.theme import load_theme
-    from ikgame.sim import Simulation
+    from ikgame.render.output import parse_size
+    from ikgame.render.video import check_video
 
     level_path = resolve_level(args.level)
-    level = load_level(level_path)
+    level, theme, named = _load(level_path, args.theme)
     out = args.out if args.out is not None else Path("runs") / _slug(level.level.name)
     # Every option is checked before anything is written: bad input leaves no half-made folder.
-    with _usage("--out"):
-        check_out_dir(out, args.force)
     with _usage("--size"):
         size = parse_size(args.size)
-    if args.theme is not None:
-        with _usage("--theme"):
-            theme = load_theme(args.theme)
-    else:
-        theme = load_theme(_level_theme(level, level_path) or "light")
     if args.workers is not None and args.workers < 1:
         raise UsageError(f"--workers: must be at least 1, got {args.workers}")
     if args.mp4:
         if args.no_frames:
             raise UsageError("--mp4: there are no pictures to encode with --no-frames")
-        from ikgame.render.video import check_video
-
         with _usage("--mp4"):
             check_video()
-    console = Console(quiet=args.quiet, highlight=False)
-    # Frames are recorded even without pictures: motion.json is written either way.
-    sim = Simulation(level, solver=args.solver)
-    scene = sim.scene
-    if not args.no_frames:
-        from ikgame.skins import skin_scene
-
-        # Sprites are decoded before the run, so an image that cannot be used stops it at once.
-        scene = skin_scene(sim.scene, level, level_path)
-    with progress_bar("simulating", 1.0, enabled=_interactive(console), console=console) as update:
-        result = sim.run(update)
-    if args.no_frames:
-        from ikgame.render.motion import write_motion
-
-        written = [write_motion(out, scene, sim.snapshots)]
-    else:
-        from ikgame.render.export import export_run
-
-        written = export_run(
-            out,
-            scene,
-            sim.snapshots,
-            size=size,
-            theme=theme,
-            gif=not args.no_gif,
-            apng=args.apng,
-            sheet=args.sheet,
-            mp4=args.mp4,
-            workers=args.workers,
-            progress=_interactive(console),
-            png_compression=args.png_compression,
-        )
-    written.append(write_json(out / "results.json", _results(result, level_path, args)))
+    _check_budget(estimate_run(level, frame_size=None if args.no_frames else size), args)
+    with _usage("--out"):
+        prepare_out_dir(out, args.force)
+    console = _console(quiet=args.quiet)
+    result, data, written = _run_into(out, level, level_path, theme, named, size, args, console)
     _print_summary(console, result, out, written)
     return EXIT_OK
 
 
+def _run_into(
+    out: Path,
+    level: Level,
+    level_path: Path,
+    theme: Theme,
+    named: dict[str, Path],
+    size: tuple[int, int],
+    args: argparse.Namespace,
+    console: Console,
+) -> tuple[RunResult, dict[str, object], list[Path]]:
+    """Simulate, export and write results.json last; a stop on the way leaves no results.json
+    (and says so)."""
+    from ikgame._progress import progress_bar
+    from ikgame.provenance import output_hashes
+    from ikgame.render.motion import write_motion
+    from ikgame.sim import Simulation
+
+    try:
+        # Frames are recorded even without pictures: motion.json is written either way.
+        sim = Simulation(level, solver=args.solver)
+        scene = sim.scene
+        if not args.no_frames:
+            from ikgame.skins import skin_scene
+
+            # Sprites are decoded before the run, so an image that cannot be used stops it at once.
+            scene = skin_scene(sim.scene, level, level_path)
+        enabled = _interactive(console)
+        with progress_bar("simulating", 1.0, enabled=enabled, console=console) as update:
+            result = sim.run(update)
+        if args.no_frames:
+            written = [write_motion(out, scene, sim.snapshots)]
+        else:
+            from ikgame.render.export import export_run
+
+            written = export_run(
+                out,
+                scene,
+                sim.snapshots,
+                size=size,
+                theme=theme,
+                gif=not args.no_gif,
+                apng=args.apng,
+                sheet=args.sheet,
+                mp4=args.mp4,
+                workers=args.workers,
+                progress=enabled,
+                png_compression=args.png_compression,
+            )
+    except KeyboardInterrupt as exc:
+        if out.is_dir():
+            remove_temporaries(out)
+        frames = sum(1 for _ in (out / "frames").glob("[0-9]*.png"))
+        kept = f"{frames} frames in {out / 'frames'}" if frames else f"nothing in {out}"
+        exc.add_note(f"the run was cut short: kept {kept}, no results.json")
+        raise
+    data = _results(result, level_path, named, size, args, output_hashes(out, written))
+    written.append(write_json(out / "results.json", data))
+    return result, data, written
+
+
 def _cmd_compare(args: argparse.Namespace) -> int:
-    from rich.console import Console
     from rich.markup import escape
 
     from ikgame._progress import progress_bar
     from ikgame.compare import compare_level, comparison_table, write_comparison
-    from ikgame.level.loader import load_level
-    from ikgame.render.output import check_out_dir
 
-    level = load_level(resolve_level(args.level))
+    level, _, _ = _load(resolve_level(args.level), None)
     # Order kept, repeats dropped: "ccd,dls,ccd" compares two solvers.
     solvers = list(dict.fromkeys(name.strip() for name in args.solvers.split(",") if name.strip()))
     unknown = [name for name in solvers if name not in SOLVER_NAMES]
@@ -316,9 +447,11 @@ def _cmd_compare(args: argparse.Namespace) -> int:
             f"choose from: {', '.join(SOLVER_NAMES)}"
         )
     out = args.out if args.out is not None else Path("runs") / f"{_slug(level.level.name)}-compare"
+    estimate = estimate_run(level, frame_size=None)
+    _check_budget(replace(estimate, simulate_s=estimate.simulate_s * len(solvers)), args)
     with _usage("--out"):
-        check_out_dir(out, args.force)
-    console = Console(quiet=args.quiet, highlight=False)
+        prepare_out_dir(out, args.force)
+    console = _console(quiet=args.quiet)
     with progress_bar("comparing", 1.0, enabled=_interactive(console), console=console) as update:
         comparison = compare_level(level, solvers, progress=update)
     written = write_comparison(out, comparison)
@@ -328,14 +461,12 @@ def _cmd_compare(args: argparse.Namespace) -> int:
 
 
 def _cmd_validate(args: argparse.Namespace) -> int:
-    from rich.console import Console
-
     from ikgame.level.loader import LevelError
     from ikgame.level.tools import validate_files
 
-    console = Console(quiet=args.quiet, highlight=False)
+    console = _console(quiet=args.quiet)
     paths = [resolve_level(name) for name in args.files]
-    problems = validate_files(paths)
+    problems = validate_files(paths, check=lambda level, path: _load(path, None, level))
     if problems:
         raise LevelError(problems)
     count = sum(len(list(p.glob("*.toml"))) if p.is_dir() else 1 for p in paths)
@@ -344,12 +475,11 @@ def _cmd_validate(args: argparse.Namespace) -> int:
 
 
 def _cmd_list(args: argparse.Namespace) -> int:
-    from rich.console import Console
     from rich.markup import escape
 
     from ikgame.level.tools import level_rows
 
-    console = Console(highlight=False)
+    console = _console()
     for row in level_rows():
         ends = "" if row["expect"] == "passed" else f", meant to end {row['expect']}"
         console.print(
@@ -362,25 +492,116 @@ def _cmd_list(args: argparse.Namespace) -> int:
 
 
 def _cmd_schema(args: argparse.Namespace) -> int:
-    from ikgame._files import write_atomic
     from ikgame.level.tools import schema_text
 
     text = schema_text()
     if args.out is None:
         sys.stdout.write(text)
     else:
-        write_atomic(args.out, text.encode("utf-8"))
+        if args.out.is_dir():
+            raise UsageError(
+                f"--out: {args.out} is a folder; name a file such as level.schema.json"
+            )
+        try:
+            write_atomic(args.out, text.encode("utf-8"))
+        except OSError as exc:
+            raise UsageError(f"--out: cannot write {args.out} ({exc.strerror})") from None
     return EXIT_OK
 
 
-def _level_theme(level: Level, level_path: Path) -> str | Path | None:
-    """The level's own theme, with a bad one reported like any other level problem."""
-    from ikgame.level.loader import LevelError, Problem, level_theme
+def _cmd_check(args: argparse.Namespace) -> int:
+    from rich.markup import escape
+
+    from ikgame.provenance import differences, file_sha256
+    from ikgame.render.output import parse_size
 
     try:
-        return level_theme(level, level_path)
+        recorded = json.loads(args.results.read_text(encoding="utf-8"))
+        rerun, prov = recorded["rerun"], recorded["provenance"]
+        # Options a results.json from an older ikgame does not record take their defaults.
+        defaults = {"mp4": False, "png_compression": 1}
+        options = argparse.Namespace(**(defaults | rerun), workers=None)
+    except (OSError, UnicodeDecodeError, ValueError, KeyError, TypeError) as exc:
+        raise UsageError(
+            f"{args.results}: not the results.json of an ikgame run ({_text(exc)})"
+        ) from None
+    level_path = resolve_level(args.level if args.level is not None else rerun["level"])
+    console = _console(quiet=args.quiet)
+    if (sha := file_sha256(level_path)) != prov["level_sha256"]:
+        console.print(
+            escape(f"{level_path} has changed since the run (sha256 {sha[:12]}...)"), soft_wrap=True
+        )
+        return EXIT_NOT_REPRODUCED
+    level, theme, named = _load(level_path, options.theme)
+    with _usage("size"):
+        size = parse_size(options.size)
+    _check_budget(estimate_run(level, frame_size=None if options.no_frames else size), args)
+    with tempfile.TemporaryDirectory(prefix="ikgame-check-") as folder:
+        _, again, _ = _run_into(
+            Path(folder), level, level_path, theme, named, size, options, _console(quiet=True)
+        )
+    found = differences(recorded, json.loads(json.dumps(again)))
+    if found:
+        console.print(
+            escape(f"{args.results}: does not reproduce; differences (recorded -> now):"),
+            soft_wrap=True,
+        )
+        for line in found:
+            console.print(escape(f"  {line}"), soft_wrap=True)
+        return EXIT_NOT_REPRODUCED
+    frames = again["outputs"].get("frames", {}).get("count", 0)  # type: ignore[union-attr]
+    extra = f", {frames} frames identical" if frames else ""
+    console.print(
+        escape(f"{args.results}: reproduces exactly ({again['status']}{extra})"), soft_wrap=True
+    )
+    return EXIT_OK
+
+
+def _load(
+    level_path: Path, theme_option: str | None, level: Level | None = None
+) -> tuple[Level, Theme, dict[str, Path]]:
+    """The level, the theme it runs with (``--theme``, else its own, else light) and the files
+    it names (sprites, and its theme when used), by the name the level gives them; a bad theme
+    file is a problem of the level, or of ``--theme``.
+    """
+    from ikgame.level.loader import (
+        LevelError,
+        Problem,
+        level_theme,
+        load_level,
+        sprite_fields,
+        sprite_file,
+    )
+
+    if level is None:
+        level = load_level(level_path)
+    # load_level has checked every sprite file: resolving them again cannot fail.
+    named = {name: sprite_file(name, level_path)[0] for _, name in sprite_fields(level)}
+    if theme_option is not None:
+        with _usage("--theme"):
+            return level, load_theme(theme_option), named
+    try:
+        own = level_theme(level, level_path)
     except ValueError as exc:
         raise LevelError([Problem(str(level_path), None, "level.theme", str(exc))]) from None
+    try:
+        theme = load_theme(own or "light")
+    except ThemeError as exc:
+        reason = f"{exc.reason} (the theme of {level_path})"
+        raise LevelError([Problem(str(exc.file), exc.line, exc.field, reason)]) from None
+    if isinstance(own, Path):
+        named[str(level.level.theme)] = own
+    return level, theme, named
+
+
+def _check_budget(estimate: RunEstimate, args: argparse.Namespace) -> None:
+    if args.no_budget or estimate.seconds <= args.budget * 60:
+        return
+    minutes = math.ceil(estimate.seconds / 60)
+    raise UsageError(
+        f"this run is estimated at {estimate.describe()}, over the budget of {args.budget:g} "
+        f"minutes; shorten the level, or pass --budget {minutes} (or --no-budget) to run it"
+    )
 
 
 def _interactive(console: Console) -> bool:
@@ -404,11 +625,35 @@ class _usage:
         return False
 
 
-def _results(result: RunResult, level_path: Path, args: argparse.Namespace) -> dict[str, object]:
+def _results(
+    result: RunResult,
+    level_path: Path,
+    named: dict[str, Path],
+    size: tuple[int, int],
+    args: argparse.Namespace,
+    outputs: dict[str, object],
+) -> dict[str, object]:
+    from ikgame.provenance import provenance
+
     data = result.as_dict()
     options = dict(data["options"])
     options.update({"level_file": level_path.name, "solver_override": args.solver})
     data["options"] = options
+    # What `ikgame check` needs to run it again: the level as named and every output option.
+    data["rerun"] = {
+        "level": args.level if args.level is not None else DEFAULT_LEVEL.stem,
+        "solver": args.solver,
+        "no_frames": args.no_frames,
+        "no_gif": args.no_gif,
+        "apng": args.apng,
+        "sheet": args.sheet,
+        "mp4": args.mp4,
+        "png_compression": args.png_compression,
+        "size": f"{size[0]}x{size[1]}",
+        "theme": args.theme,
+    }
+    data["provenance"] = provenance(level_path, named)
+    data["outputs"] = outputs
     return data
 
 
@@ -497,6 +742,7 @@ class _KeysHelp(argparse.RawDescriptionHelpFormatter):
 
 
 def _live_commands(sub: argparse._SubParsersAction) -> None:
+
     play = sub.add_parser(
         "play",
         help="play a level live in a window: drag the target with the mouse",
@@ -547,13 +793,13 @@ def _extra(module: str, extra: str, purpose: str) -> None:
 
 
 def _cmd_play(args: argparse.Namespace) -> int:
+    from ikgame.render.output import parse_size
+
     _extra("pygame", "play", "ikgame play")
     if args.watch:
         _extra("watchfiles", "watch", "ikgame play --watch")
     from ikgame.app.state import PlayState
     from ikgame.app.window import NoDisplay, play
-    from ikgame.render.output import parse_size
-    from ikgame.render.theme import load_theme
 
     with _usage("--size"):
         size = parse_size(args.size)
@@ -572,9 +818,6 @@ def _cmd_play(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
-EXIT_INTERRUPTED = 130  # what main returns on Ctrl-C
-
-
 def _cmd_watch(
     args: argparse.Namespace,
     *,
@@ -583,12 +826,12 @@ def _cmd_watch(
 ) -> int:
     """``stop`` and ``ready`` let a caller other than the terminal end the watch and know when
     it is in place (see :func:`ikgame.app.watch.watch_level`)."""
-    _extra("watchfiles", "watch", "ikgame watch")
-    from rich.console import Console
     from rich.markup import escape
 
-    from ikgame.app.watch import level_files, watch_level
     from ikgame.level.tools import validate_files
+
+    _extra("watchfiles", "watch", "ikgame watch")
+    from ikgame.app.watch import level_files, watch_level
 
     level_path = resolve_level(args.level)
     # Every run goes through the run command itself: same checks, outputs, messages and table.
@@ -607,7 +850,7 @@ def _cmd_watch(
         forced = forced or code == EXIT_OK
         return code
 
-    console = Console(quiet=args.quiet, highlight=False)
+    console = _console(quiet=args.quiet)
 
     def again() -> None:
         console.print(f"\n[bold]{escape(level_path.name)}[/] changed: running it again")

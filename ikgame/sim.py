@@ -25,6 +25,7 @@ from ikgame.control.dynamics import ChainInertia
 from ikgame.control.servo import Servo
 from ikgame.kinematics import SolveStatus
 from ikgame.level.model import (
+    MAX_COORD,
     BallProp,
     CircleObstacle,
     FollowCircle,
@@ -86,6 +87,7 @@ class RunResult:
         goals: per-goal outcomes.
         score: 0..100, see :mod:`ikgame.level.scoring`.
         expect: the status the level is designed to end with.
+        divergence: for a ``diverged`` run, the body that blew up and the tick, else empty.
     """
 
     level: str
@@ -98,6 +100,7 @@ class RunResult:
     goals: tuple[GoalOutcome, ...] = ()
     score: float = 0.0
     expect: str = "passed"
+    divergence: str = ""
 
     def as_dict(self) -> dict[str, object]:
         """Plain data in a fixed key order."""
@@ -116,7 +119,7 @@ class RunResult:
             "steps": [s.as_dict() for s in self.steps],
             "goals": [g.as_dict() for g in self.goals],
             "options": dict(self.options),
-        }
+        } | ({"divergence": self.divergence} if self.divergence else {})
 
 
 class Simulation:
@@ -164,6 +167,7 @@ class Simulation:
         self.dt = 1.0 / level.world.tick_rate
         self.tick = 0
         self.diverged = False
+        self._divergence = ""
         self.record = record
         self.snapshots: list[Snapshot] = []
         self._override: np.ndarray | None = None
@@ -196,10 +200,7 @@ class Simulation:
         if point is None:
             self._override = None
             return
-        arr = np.asarray(point, dtype=float)
-        if arr.shape != (2,) or not np.all(np.isfinite(arr)):
-            raise ValueError(f"target must be a finite (x, y) pair in px, got {point!r}")
-        self._override = arr
+        self._override = _check_target(point)
 
     @property
     def done(self) -> bool:
@@ -269,6 +270,7 @@ class Simulation:
         self.tick += count
         if self.world.diverged():
             self.diverged = True
+            self._divergence = f"{self.world.divergence()} blew up at tick {self.tick}"
             return None
         if self.world.skeleton is not self.controller.skeleton:
             # The base moved: the solver must work from where it is now.
@@ -364,6 +366,7 @@ class Simulation:
                 diverged=self.diverged,
             ),
             expect=self.level.level.expect,
+            divergence=self._divergence,
         )
         if self.done:
             self._result = result
@@ -387,6 +390,31 @@ class Simulation:
             torque_limited=self._last.torque_limited.copy(),
             props=self.world.prop_states(),
         )
+
+
+def _check_target(point: object) -> np.ndarray:
+    """``point`` as a (2,) float array, or ``ValueError``: two real numbers (not strings, not
+    bools), each within ``MAX_COORD`` px of the origin, the range of every level coordinate.
+
+    >>> _check_target((3, 4.5)).tolist()
+    [3.0, 4.5]
+    >>> _check_target(("1", "2"))
+    Traceback (most recent call last):
+    ...
+    ValueError: target must be two numbers (x, y) in px within +-100000, got ('1', '2')
+    """
+    values = list(point) if isinstance(point, tuple | list | np.ndarray) else None
+    ok = values is not None and len(values) == 2
+    ok = ok and all(
+        isinstance(v, int | float | np.integer | np.floating) and not isinstance(v, bool | np.bool_)
+        for v in values
+    )
+    arr = np.asarray(values if ok else (math.nan, math.nan), dtype=float)
+    if not (ok and arr.shape == (2,) and np.all(np.abs(arr) <= MAX_COORD)):
+        raise ValueError(
+            f"target must be two numbers (x, y) in px within +-{MAX_COORD:g}, got {point!r}"
+        )
+    return arr
 
 
 def run_level(level: Level, *, solver: str | None = None, record: bool = True) -> Simulation:

@@ -51,7 +51,10 @@ def test_bad_level_exits_2_with_file_line_and_field(tmp_path, capsys):
     out = tmp_path / "out"
     assert main(["run", str(bad), "--out", str(out)]) == 2
     err = capsys.readouterr().err
-    assert f"{bad}:6: chain.links[0].length: Input should be greater than 0 (got -3)" in err
+    assert (
+        f"{bad}:6: chain.links[0].length: Input should be greater than or equal to 0.1 (got -3)"
+        in err
+    )
     assert "Traceback" not in err
     assert not out.exists()
 
@@ -176,8 +179,14 @@ def test_validate_lists_every_problem_and_exits_2(tmp_path, capsys):
     bad.write_text('[level]\nname = "x"\nduration = -1\n[chain]\n[[chain.links]]\nlength = 0\n')
     assert main(["validate", str(ROOT / "levels"), str(bad)]) == 2
     err = capsys.readouterr().err.splitlines()
-    assert f"error: {bad}:3: level.duration: Input should be greater than 0 (got -1)" in err
-    assert f"error: {bad}:6: chain.links[0].length: Input should be greater than 0 (got 0)" in err
+    assert (
+        f"error: {bad}:3: level.duration: Input should be greater than or equal to 0.001 (got -1)"
+        in err
+    )
+    assert (
+        f"error: {bad}:6: chain.links[0].length: Input should be greater than or equal to 0.1 (got 0)"
+        in err
+    )
     assert f"error: {bad}: script: Field required" in err
 
 
@@ -259,6 +268,132 @@ def test_compare_runs_every_solver_on_every_shipped_level(tmp_path, level):
     assert main(["compare", str(level), "--quiet", "--out", str(out)]) == 0
     data = json.loads((out / "compare.json").read_text())
     assert list(data["solvers"]) == ["ccd", "jacobian_transpose", "dls", "fabrik"]
+
+
+_THEMES = {
+    "bad_json": b'{"background": ',
+    "bad_colour": None,  # a complete theme with one colour broken, built below
+    "missing_key": b'{"background": "#000000"}',
+    "a_list": b"[1, 2, 3]",
+    "latin1": '{"name": "caf\u00e9"'.encode("latin-1"),
+    "deep": b"[" * 100_000 + b"]" * 100_000,
+}
+
+
+@pytest.mark.parametrize("case", sorted(_THEMES))
+def test_a_broken_theme_file_is_reported_by_validate_and_run_with_its_line(tmp_path, capsys, case):
+    from ikgame.render.theme import Theme, fields
+
+    data = _THEMES[case]
+    if data is None:
+        colours = {f.name: "#000000" for f in fields(Theme)} | {"link": "#12345"}
+        data = json.dumps(colours, indent=1).encode()
+    (tmp_path / "mine.json").write_bytes(data)
+    level = tmp_path / "level.toml"
+    text = (ROOT / "levels" / "01_first_reach.toml").read_text()
+    level.write_text(text.replace("[level]\n", '[level]\ntheme = "mine.json"\n', 1))
+    assert main(["validate", str(level)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"error: {tmp_path / 'mine.json'}") and "the theme of" in err, err
+    if case == "bad_colour":
+        assert f"mine.json:{list(colours).index('link') + 2}: link: expected" in err
+    out = tmp_path / "out"
+    assert main(["run", str(level), "--out", str(out)]) == 2
+    assert capsys.readouterr().err.startswith(f"error: {tmp_path / 'mine.json'}")
+    assert main(["run", "--theme", str(tmp_path / "mine.json"), "--out", str(out)]) == 2
+    assert capsys.readouterr().err.startswith(f"error: --theme: {tmp_path / 'mine.json'}")
+    assert not out.exists()
+
+
+def test_schema_out_a_folder_or_an_unwritable_path_exits_2(tmp_path, capsys):
+    assert main(["schema", "--out", str(tmp_path)]) == 2
+    assert "is a folder" in capsys.readouterr().err
+    (tmp_path / "file").write_text("x")
+    assert main(["schema", "--out", str(tmp_path / "file" / "schema.json")]) == 2
+    assert "cannot write" in capsys.readouterr().err
+
+
+def test_an_expensive_level_is_refused_by_the_budget_before_it_runs(tmp_path, capsys):
+    level = tmp_path / "huge.toml"
+    level.write_text(
+        '[level]\nname = "huge"\nduration = 600.0\n[world]\ntick_rate = 500\nfps = 30\n'
+        "[chain]\niterations = 1000\n[[chain.links]]\nlength = 10.0\nrepeat = 200\n"
+        "[[script]]\nwait = 600.0\n"
+    )
+    out = tmp_path / "out"
+    assert main(["run", str(level), "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "this run is estimated at about" in err and "300000 ticks" in err
+    assert "--budget" in err and "--no-budget" in err
+    assert not out.exists()
+    assert main(["run", str(level), "--no-frames", "--budget", "0.001", "--out", str(out)]) == 2
+    assert main(["run", "--no-frames", "--quiet", "--budget", "5", "--out", str(out)]) == 0
+
+
+def test_an_output_folder_that_cannot_be_written_is_refused_before_simulating(tmp_path, capsys):
+    (tmp_path / "file").write_text("x")
+    (tmp_path / "dangling").symlink_to(tmp_path / "nowhere")
+    gif_folder = tmp_path / "gif"
+    (gif_folder / "run.gif").mkdir(parents=True)
+    frames_link = tmp_path / "linked"
+    frames_link.mkdir()
+    (tmp_path / "elsewhere").mkdir()
+    (tmp_path / "elsewhere" / "000000.png").write_bytes(b"not ours")
+    (frames_link / "frames").symlink_to(tmp_path / "elsewhere")
+    cases = {
+        tmp_path / "file" / "out": "cannot create",
+        tmp_path / "dangling": "a symlink to nothing",
+        gif_folder: "run.gif is not what ikgame writes there",
+        frames_link: "frames is a symlink",
+    }
+    for out, message in cases.items():
+        assert main(["run", "--no-frames", "--force", "--out", str(out)]) == 2
+        assert message in capsys.readouterr().err
+    assert not (tmp_path / "nowhere").exists()
+    assert (tmp_path / "elsewhere" / "000000.png").read_bytes() == b"not ours"
+    assert not (gif_folder / "results.json").exists()
+
+
+def test_force_clears_the_earlier_run_first_and_keeps_other_files(tmp_path):
+    out = tmp_path / "out"
+    args = ["run", "--quiet", "--size", "32x18", "--out", str(out)]
+    assert main(args) == 0
+    assert (out / "run.gif").exists() and (out / "frames" / "000000.png").exists()
+    (out / "notes.txt").write_text("mine")
+    (out / ".run.gif.0123456789ab.tmp").write_bytes(b"left by a killed run")
+    assert main([*args, "--force", "--no-frames"]) == 0
+    assert sorted(p.name for p in out.iterdir()) == ["motion.json", "notes.txt", "results.json"]
+
+
+def test_check_reproduces_a_run_and_reports_a_difference(tmp_path, capsys):
+    out = tmp_path / "out"
+    assert main(["run", "--quiet", "--size", "32x18", "--no-gif", "--out", str(out)]) == 0
+    data = json.loads((out / "results.json").read_text())
+    assert set(data["provenance"]["versions"]) == {"ikgame", "python", "pymunk", "numpy", "pillow"}
+    assert data["outputs"]["frames"]["count"] == len(list((out / "frames").glob("*.png")))
+    assert main(["check", str(out / "results.json")]) == 0
+    assert "reproduces exactly (passed" in capsys.readouterr().out
+    data["steps"][0]["final_error"] += 1.0
+    (out / "results.json").write_text(json.dumps(data))
+    assert main(["check", str(out / "results.json")]) == 3
+    assert "steps[0].final_error" in capsys.readouterr().out
+    (out / "results.json").write_text("{}")
+    assert main(["check", str(out / "results.json")]) == 2
+
+
+def test_a_full_disk_during_the_export_exits_2_and_says_so(tmp_path, capsys, monkeypatch):
+    import errno
+
+    import ikgame.render.export
+
+    def full(*args, **kwargs):
+        raise OSError(errno.ENOSPC, "No space left on device", str(tmp_path / "out" / "run.gif"))
+
+    monkeypatch.setattr(ikgame.render.export, "export_run", full)
+    assert main(["run", "--quiet", "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert "cannot write" in err and "run.gif: No space left on device" in err
+    assert not (tmp_path / "out" / "results.json").exists()
 
 
 # -- sprites and MP4 -----------------------------------------------------------------------------

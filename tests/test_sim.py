@@ -105,8 +105,12 @@ def test_target_from_code_overrides_the_script(make_level):
     assert np.hypot(*(sim.joint_positions()[-1] - (-120.0, 120.0))) < 2.0
     sim.target = None
     assert sim.target.tolist() == [150.0, 150.0]
-    with pytest.raises(ValueError, match="finite"):
-        sim.target = (math.nan, 0.0)
+    for bad in [(math.nan, 0.0), ("1", "2"), (True, False), (1e200, -1e200), (1.0,), "ab"]:
+        with pytest.raises(ValueError, match="two numbers"):
+            sim.target = bad
+    assert sim.target.tolist() == [150.0, 150.0]  # a refused target changes nothing
+    sim.target = np.array([1e5, -1e5])
+    assert sim.target.tolist() == [1e5, -1e5]
 
 
 def test_a_blown_up_world_is_reported_as_diverged(make_level):
@@ -115,3 +119,14 @@ def test_a_blown_up_world_is_reported_as_diverged(make_level):
     sim.world.bodies[1].velocity = (1e12, 0.0)
     result = sim.run()
     assert result.status == "diverged"
+    assert result.as_dict()["divergence"] == "link 2 blew up at tick 2"
+
+
+def test_a_blow_up_while_the_base_moves_is_diverged_not_a_crash(make_level):
+    sim = Simulation(make_level(script=[{"set": {"base": [80.0, 0.0], "over": 1.0}}, {"wait": 2}]))
+    sim.step()
+    sim.world.bodies[0].position = (math.nan, math.nan)
+    sim.world.base_body.position = (math.nan, math.nan)
+    result = sim.run()
+    assert result.status == "diverged"
+    assert result.as_dict()["divergence"] == "base blew up at tick 2"

@@ -241,7 +241,7 @@ def fit_drive(
         return Drive(wanted, full, np.zeros(len(limit), dtype=bool))
     consistent = True
     slope = push.torques
-    with np.errstate(divide="ignore", invalid="ignore"):
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         to_upper = (limit - bias.torques) / slope
         to_lower = (-limit - bias.torques) / slope
     moving = slope != 0.0

@@ -56,6 +56,16 @@ MAX_SPRITE_PIXELS: Final = 1024 * 1024
 MAX_SPRITE_TOTAL_PIXELS: Final = 8 * 1024 * 1024
 """Pixels of a level's distinct sprite images together: bounds the memory a level's art takes."""
 _PNG_SIGNATURE: Final = b"\x89PNG\r\n\x1a\n"
+MAX_KEY_PARTS: Final = 8
+"""Parts of one dotted key or table header (``a.b.c`` has 3); the format needs 3 at most."""
+MAX_NESTING: Final = 8
+"""Arrays and inline tables inside each other; the format needs 3 at most."""
+MAX_TOKEN_CHARS: Final = 100
+"""Characters of one bare key or number (a float needs 25)."""
+MAX_STRING_CHARS: Final = 10_000
+"""Characters of one string, as written (a description may have 2000)."""
+MAX_PROBLEMS: Final = 50
+"""Problems listed for one file: more than this helps nobody, and each costs time."""
 
 _TAGGED: Final = ("script", "obstacles", "props")
 """Lists of tagged unions: pydantic names the member's tag after the index."""
@@ -68,6 +78,7 @@ _FOLLOW_KEYS: Final = {
     for shape, model in FOLLOW_SHAPES.items()
 }
 _TOML_AT = re.compile(r"\(at line (\d+), column (\d+)\)$")
+_KEY = re.compile(r'^\s*"?([A-Za-z0-9_\-]+)"?\s*[=.]')
 _HEADER = re.compile(r"^\s*(\[\[?)\s*([A-Za-z0-9_.\-\" ]+?)\s*\]\]?\s*(#.*)?$")
 
 
@@ -136,7 +147,7 @@ def load_level(path: str | Path) -> Level:
         try:
             level_theme(level, path)
         except ValueError as exc:
-            line = _locate(text, _tables(text), ("level", "theme"))
+            line = _Locator(text)(("level", "theme"))
             raise LevelError([Problem(name, line, "level.theme", str(exc))]) from None
     problems = _sprite_problems(level, path, text)
     if problems:
@@ -219,7 +230,7 @@ def _sprite_problems(level: Level, level_file: Path, text: str) -> list[Problem]
     fields = sprite_fields(level)
     if not fields:
         return []
-    tables = _tables(text)
+    locate = _Locator(text)
     problems = []
     # Each file is read once, however many links name it: a level may name 300 sprites.
     checked: dict[str, tuple[Path, int] | str] = {}
@@ -232,7 +243,7 @@ def _sprite_problems(level: Level, level_file: Path, text: str) -> list[Problem]
                 checked[name] = str(exc)
         result = checked[name]
         if isinstance(result, str):
-            where = _locate(text, tables, loc)
+            where = locate(loc)
             problems.append(Problem(str(level_file), where, _field_path(loc), result))
     sizes = dict(r for r in checked.values() if not isinstance(r, str))
     if not problems and sum(sizes.values()) > MAX_SPRITE_TOTAL_PIXELS:
@@ -240,7 +251,7 @@ def _sprite_problems(level: Level, level_file: Path, text: str) -> list[Problem]
         problems.append(
             Problem(
                 str(level_file),
-                _locate(text, tables, loc),
+                locate(loc),
                 _field_path(loc),
                 f"the level's sprite images hold {sum(sizes.values()):,} pixels together; "
                 f"at most {MAX_SPRITE_TOTAL_PIXELS:,}",
@@ -260,7 +271,7 @@ def problem_at(level_file: str | Path, loc: tuple[str | int, ...], message: str)
     try:
         with open(level_file, "rb") as handle:
             text = handle.read(MAX_FILE_BYTES).decode("utf-8", errors="replace")
-        line = _locate(text, _tables(text), loc)
+        line = _Locator(text)(loc)
     except OSError:
         line = None
     return Problem(str(level_file), line, _field_path(loc), message)
@@ -324,6 +335,7 @@ def parse_level(text: str, file: str = "<level>") -> Level:
     x.toml: chain: Field required
     x.toml: script: Field required
     """
+    _check_shape(text, file)
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
@@ -331,23 +343,110 @@ def parse_level(text: str, file: str = "<level>") -> Level:
         message = str(exc)
         at = _TOML_AT.search(message)
         line = int(at.group(1)) if at else None
+        if message.endswith("(at end of document)"):
+            line = text.count("\n") + (not text.endswith("\n"))
+            message = message.removesuffix(" (at end of document)") + " (at the end of the file)"
         if at:
             message = f"{message[: at.start()]}(column {at.group(2)})"
         raise LevelError([Problem(file, line, "", f"invalid TOML: {message}")]) from None
-    except RecursionError:
-        raise LevelError([Problem(file, None, "", "invalid TOML: nested too deeply")]) from None
+    except (RecursionError, ValueError) as exc:
+        # ValueError: an integer past Python's digit limit slipped through (not a TOMLDecodeError).
+        what = "nested too deeply" if isinstance(exc, RecursionError) else "a number too long"
+        raise LevelError([Problem(file, None, "", f"invalid TOML: {what}")]) from None
     try:
         return Level.model_validate(data)
     except ValidationError as exc:
-        tables = _tables(text)
+        locate = _Locator(text)
         problems = []
         for err in exc.errors(include_url=False):
             loc = _without_tags(err["loc"])
             message = _message(err)
             if err["type"] in ("union_tag_invalid", "union_tag_not_found"):
                 loc = (*loc, err["ctx"]["discriminator"].strip("'"))
-            problems.append(Problem(file, _locate(text, tables, loc), _field_path(loc), message))
+            problems.append(Problem(file, locate(loc), _field_path(loc), message))
+            if len(problems) == MAX_PROBLEMS:
+                more = exc.error_count() - MAX_PROBLEMS
+                if more:
+                    problems.append(Problem(file, None, "", f"and {more} more problems"))
+                break
         raise LevelError(problems) from None
+
+
+_BARE = frozenset("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789_-+")
+
+
+def _check_shape(text: str, file: str) -> None:
+    """Refuse TOML shapes that no level has and that make parsers slow: keys of many dotted
+    parts, deep nesting, very long bare tokens (huge numbers) and strings.
+
+    One pass over the text, so a hostile megabyte costs milliseconds. Strings and comments are
+    skipped as TOML reads them; anything this scanner gets wrong is left to the TOML parser.
+
+    >>> _check_shape("a.b.c.d.e.f.g.h.i = 1", "x.toml")
+    Traceback (most recent call last):
+    ...
+    ikgame.level.loader.LevelError: x.toml:1: a key of more than 8 dotted parts
+    """
+
+    def refuse(what: str) -> LevelError:
+        return LevelError([Problem(file, line, "", what)])
+
+    line, depth, parts, token, i, n = 1, 0, 1, 0, 0, len(text)
+    in_key = True  # at a key (line start, after '{' or ',' in an inline table) until '='
+    while i < n:
+        c = text[i]
+        if c in _BARE:
+            token += 1
+            if token > MAX_TOKEN_CHARS:
+                raise refuse(f"a bare key or number longer than {MAX_TOKEN_CHARS} characters")
+            i += 1
+            continue
+        token = 0
+        if c == "\n":
+            line += 1
+            parts, in_key = 1, depth == 0
+        elif c == "#":
+            end = text.find("\n", i)
+            i = n if end < 0 else end
+            continue
+        elif c in "\"'":
+            quote = text[i : i + 3] if text.startswith(c * 3, i) else c
+            end = text.find(quote, i + len(quote))
+            while quote[0] == '"' and end > 0 and _escaped(text, end):
+                end = text.find(quote, end + 1)
+            while len(quote) == 3 and end > 0 and text.startswith(quote, end + 1):
+                end += 1  # """a"""" ends with a quote inside
+            if end < 0 or (len(quote) == 1 and "\n" in text[i:end]):
+                return  # unterminated: the TOML parser says where
+            if end - i > MAX_STRING_CHARS:
+                raise refuse(f"a string longer than {MAX_STRING_CHARS} characters")
+            line += text.count("\n", i, end)
+            i = end + len(quote)
+            continue
+        elif c in "[{":
+            depth += 1
+            if depth > MAX_NESTING:
+                raise refuse(f"arrays or tables nested more than {MAX_NESTING} deep")
+            in_key = in_key or c == "{"
+        elif c in "]}":
+            depth = max(0, depth - 1)
+        elif c == "." and in_key:
+            parts += 1
+            if parts > MAX_KEY_PARTS:
+                raise refuse(f"a key of more than {MAX_KEY_PARTS} dotted parts")
+        elif c == "=":
+            in_key, parts = False, 1
+        elif c == ",":
+            in_key, parts = True, 1
+        i += 1
+
+
+def _escaped(text: str, at: int) -> bool:
+    """Whether the quote at ``at`` follows an odd number of backslashes."""
+    count = 0
+    while at - count - 1 >= 0 and text[at - count - 1] == "\\":
+        count += 1
+    return count % 2 == 1
 
 
 def _without_tags(loc: tuple[object, ...]) -> tuple[object, ...]:
@@ -428,30 +527,47 @@ def _tables(text: str) -> dict[tuple[object, ...], int]:
             counts[keys] = counts.get(keys, 0) + 1
             path.append(counts[keys] - 1)
         tables[tuple(path)] = number
+        for cut in range(1, len(path)):  # ``[a.b]`` defines ``a`` too, on the same line
+            tables.setdefault(tuple(path[:cut]), number)
     return tables
 
 
-def _locate(
-    text: str, tables: dict[tuple[object, ...], int], loc: tuple[object, ...]
-) -> int | None:
-    """The line of ``loc`` in ``text``: its key inside the deepest table that contains it."""
-    for cut in range(len(loc), -1, -1):
-        prefix = tuple(loc[:cut])
-        if prefix not in tables:
-            continue
-        start = tables[prefix]
-        if cut == len(loc) or not isinstance(loc[cut], str):
-            return start if prefix else None
-        if (*prefix, loc[cut], 0) in tables:  # an array of tables: its first header
-            return tables[(*prefix, loc[cut], 0)]
-        # ``key =``, or a dotted key such as ``set.base =``.
-        key = re.compile(rf"^\s*\"?{re.escape(str(loc[cut]))}\"?\s*[=.]")
-        lines = text.splitlines()
-        for number in range(start if prefix else 1, len(lines) + 1):
-            line = lines[number - 1]
-            if number > start and _HEADER.match(line):
-                break
-            if key.match(line):
-                return number
-        return start if prefix else None
-    return None
+class _Locator:
+    """Finds the line of a field's path in a level's text; each table's keys are indexed once,
+    so locating every problem of a file takes time linear in the file."""
+
+    def __init__(self, text: str) -> None:
+        self.lines = text.splitlines()
+        self.tables = _tables(text)
+        self._keys: dict[int, dict[str, int]] = {}
+
+    def __call__(self, loc: tuple[object, ...]) -> int | None:
+        """The line of ``loc``: its key inside the deepest table that contains it."""
+        tables = self.tables
+        for cut in range(len(loc), -1, -1):
+            prefix = tuple(loc[:cut])
+            if prefix not in tables:
+                continue
+            start = tables[prefix]
+            if cut == len(loc) or not isinstance(loc[cut], str):
+                return start if prefix else None
+            if (*prefix, loc[cut], 0) in tables:  # an array of tables: its first header
+                return tables[(*prefix, loc[cut], 0)]
+            found = self._table_keys(start if prefix else 1).get(str(loc[cut]))
+            return found if found is not None else start if prefix else None
+        return None
+
+    def _table_keys(self, start: int) -> dict[str, int]:
+        """The first line of each key (``key =``, or a dotted ``key.sub =``) from ``start`` to
+        the next table header."""
+        if start not in self._keys:
+            keys: dict[str, int] = {}
+            for number in range(start, len(self.lines) + 1):
+                line = self.lines[number - 1]
+                if number > start and _HEADER.match(line):
+                    break
+                match = _KEY.match(line)
+                if match:
+                    keys.setdefault(match.group(1), number)
+            self._keys[start] = keys
+        return self._keys[start]

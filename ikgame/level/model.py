@@ -40,6 +40,7 @@ __all__ = [
     "MAX_GOALS",
     "MAX_FRAMES",
     "MAX_TICKS",
+    "MAX_COORD",
     "SOLVER_NAMES",
     "FOLLOW_SHAPES",
     "Level",
@@ -87,6 +88,21 @@ MAX_TICKS: Final = 300_000
 """Physics ticks (``duration`` x ``tick_rate``): bounds the time a run can take."""
 MAX_COORD: Final = 1.0e5
 """Largest coordinate or length, px: beyond it the camera and physics lose all meaning."""
+MIN_SIZE: Final = 0.1
+"""Smallest length, width or radius, px: a tenth of a rendered pixel. Smaller bodies have moments
+of inertia that underflow (pymunk refuses a zero moment) and Jacobians too small to invert."""
+MIN_MASS: Final = 1.0e-3
+"""Smallest mass: with :data:`MIN_SIZE` it keeps every moment of inertia a normal float."""
+MAX_MASS_RATIO: Final = 1000.0
+"""Largest mass ratio of two joined links: pymunk's iterative joint solver spreads an impulse in
+proportion to the inverse masses, and past about 10^4 the light link is thrown about."""
+MIN_SECONDS: Final = 1.0e-3
+"""Shortest time a level may name, s: two ticks at the fastest tick rate. Shorter periods make
+rates such as 2 pi / period overflow."""
+MIN_TICKS_PER_TURN: Final = 8
+"""A circling or oscillating target needs this many physics ticks per turn to be a path at all
+rather than a few points jumping about; a base move needs as many ticks to accelerate the chain
+rather than teleport its pivot (which the joint solver answers with unbounded impulses)."""
 
 # Printable text only: a level's names end up in terminals and pictures.
 _NAME_PATTERN: Final = r"^[^\x00-\x1f\x7f]*$"
@@ -98,10 +114,10 @@ Fraction = Annotated[float, Field(ge=0, le=1, allow_inf_nan=False)]
 SpriteScale = Annotated[float, Field(gt=0, le=1000, allow_inf_nan=False)]
 Vec2 = tuple[Coord, Coord]
 Region = tuple[Coord, Coord, Coord, Coord]
-Length = Annotated[float, Field(gt=0, le=MAX_COORD, allow_inf_nan=False)]
-Seconds = Annotated[float, Field(gt=0, le=MAX_DURATION, allow_inf_nan=False)]
+Length = Annotated[float, Field(ge=MIN_SIZE, le=MAX_COORD, allow_inf_nan=False)]
+Seconds = Annotated[float, Field(ge=MIN_SECONDS, le=MAX_DURATION, allow_inf_nan=False)]
 Degrees = Annotated[float, Field(ge=-180.0, le=180.0, allow_inf_nan=False)]
-Mass = Annotated[float, Field(gt=0, le=1e6, allow_inf_nan=False)]
+Mass = Annotated[float, Field(ge=MIN_MASS, le=1e6, allow_inf_nan=False)]
 Friction = Annotated[float, Field(ge=0, le=10, allow_inf_nan=False)]
 Tolerance = Annotated[float, Field(gt=0, le=1000, allow_inf_nan=False)]
 Gain = Annotated[float, Field(gt=0, le=1000, allow_inf_nan=False)]
@@ -247,6 +263,15 @@ class WorldConfig(_Model):
     def _bounds_ordered(self) -> WorldConfig:
         if self.bounds is not None:
             _check_region(self.bounds, "bounds")
+        if self.fps > self.tick_rate:
+            # A frame is taken at a tick: more frames than ticks would repeat frames and play
+            # the run back faster than it ran.
+            raise _invalid(
+                ("fps",),
+                f"{self.fps} fps is more frames than the {self.tick_rate} ticks/s of "
+                f"world.tick_rate; at most {self.tick_rate} (or raise world.tick_rate)",
+                self.fps,
+            )
         return self
 
 
@@ -267,7 +292,7 @@ class LinkConfig(_Model):
     length: Length = Field(description="Link length, px.")
     mass: Mass = Field(1.0, description="Link mass.")
     width: float = Field(
-        12.0, gt=0, le=1000, allow_inf_nan=False, description="Link thickness, px."
+        12.0, ge=MIN_SIZE, le=1000, allow_inf_nan=False, description="Link thickness, px."
     )
     limits: tuple[Degrees, Degrees] | None = Field(
         None, description="Joint limits relative to the parent link, degrees [min, max]."
@@ -325,6 +350,26 @@ class ChainConfig(_Model):
         if total > MAX_LINKS:
             raise _invalid(
                 ("links",), f"a chain has at most {MAX_LINKS} links, this one has {total}", total
+            )
+        for i, (before, link) in enumerate(zip(self.links, self.links[1:], strict=False), start=1):
+            ratio = max(before.mass, link.mass) / min(before.mass, link.mass)
+            if ratio > MAX_MASS_RATIO:
+                raise _invalid(
+                    ("links", i, "mass"),
+                    f"{link.mass:g} is {ratio:.3g} times {'more' if link.mass > before.mass else 'less'} "
+                    f"than the mass of the link before it ({before.mass:g}); joined links may "
+                    f"differ at most {MAX_MASS_RATIO:g} times, beyond that the physics cannot "
+                    "hold the joint between them and blows up",
+                    link.mass,
+                )
+        reach = sum(link.length * link.repeat for link in self.links)
+        if reach > MAX_COORD:
+            # Every coordinate is within MAX_COORD; a longer chain would reach where the
+            # physics counts a body as blown up.
+            raise _invalid(
+                ("links",),
+                f"the links add up to {reach:g} px; at most {MAX_COORD:g} (shorten the links)",
+                reach,
             )
         return self
 
@@ -389,7 +434,7 @@ class BallProp(_Prop):
     """[[props]] with kind = "ball": a dynamic disc the chain can push."""
 
     kind: Literal["ball"] = Field(description="Which kind of prop.")
-    radius: Annotated[float, Field(gt=0, le=1000, allow_inf_nan=False)] = Field(
+    radius: Annotated[float, Field(ge=MIN_SIZE, le=1000, allow_inf_nan=False)] = Field(
         description="Radius, px."
     )
 
@@ -399,8 +444,8 @@ class BoxProp(_Prop):
 
     kind: Literal["box"] = Field(description="Which kind of prop.")
     size: tuple[
-        Annotated[float, Field(gt=0, le=2000, allow_inf_nan=False)],
-        Annotated[float, Field(gt=0, le=2000, allow_inf_nan=False)],
+        Annotated[float, Field(ge=MIN_SIZE, le=2000, allow_inf_nan=False)],
+        Annotated[float, Field(ge=MIN_SIZE, le=2000, allow_inf_nan=False)],
     ] = Field(description="Width and height, px.")
 
 
@@ -646,6 +691,122 @@ def step_count(script: list[Step] | tuple[Step, ...]) -> int:
     return sum(len(s.sequence) if isinstance(s, SequenceStep) else 1 for s in script)
 
 
+def _check_start_clear(
+    chain: ChainConfig, obstacles: list[SegmentObstacle | CircleObstacle]
+) -> None:
+    """Refuse a chain whose links start with their axis inside an obstacle: the links hang from
+    a fixed base, so the physics would push them out against joints that cannot give, without
+    bound."""
+    angle = math.radians(chain.angle)
+    joint = chain.base
+    for k, link in enumerate(chain.expanded_links):
+        low, high = link.limits or (0.0, 0.0)
+        angle += math.radians(min(max(0.0, low), high))
+        end = (joint[0] + link.length * math.cos(angle), joint[1] + link.length * math.sin(angle))
+        for j, obstacle in enumerate(obstacles):
+            if isinstance(obstacle, SegmentObstacle):
+                gap = _segments_distance(joint, end, obstacle.a, obstacle.b)
+            else:
+                gap = _point_segment_distance(obstacle.center, joint, end)
+            # A link's rounded edge may start in an obstacle (pymunk eases a shallow overlap
+            # out); its axis may not.
+            if gap < obstacle.radius:
+                raise _invalid(
+                    ("obstacles", j),
+                    f"link {k + 1} of the chain starts inside this obstacle (its axis "
+                    f"{obstacle.radius - gap:.3g} px deep); the chain hangs from a fixed base "
+                    "and could not be pushed out: move the obstacle or change chain.base / "
+                    "chain.angle",
+                    None,
+                )
+        joint = end
+
+
+def _point_segment_distance(
+    p: tuple[float, float], a: tuple[float, float], b: tuple[float, float]
+) -> float:
+    """Distance from point ``p`` to the segment ``ab``, px.
+
+    >>> _point_segment_distance((0.0, 5.0), (-1.0, 0.0), (1.0, 0.0))
+    5.0
+    """
+    dx, dy = b[0] - a[0], b[1] - a[1]
+    length2 = dx * dx + dy * dy
+    t = 0.0 if length2 == 0 else ((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / length2
+    t = min(1.0, max(0.0, t))
+    return math.hypot(p[0] - a[0] - t * dx, p[1] - a[1] - t * dy)
+
+
+def _segments_distance(
+    a: tuple[float, float],
+    b: tuple[float, float],
+    c: tuple[float, float],
+    d: tuple[float, float],
+) -> float:
+    """Distance between the segments ``ab`` and ``cd``, px (0 when they cross).
+
+    >>> _segments_distance((-1.0, 0.0), (1.0, 0.0), (0.0, -1.0), (0.0, 1.0))
+    0.0
+    """
+
+    def side(p: tuple[float, float], q: tuple[float, float], r: tuple[float, float]) -> float:
+        return (q[0] - p[0]) * (r[1] - p[1]) - (q[1] - p[1]) * (r[0] - p[0])
+
+    if side(a, b, c) * side(a, b, d) < 0 and side(c, d, a) * side(c, d, b) < 0:
+        return 0.0
+    return min(
+        _point_segment_distance(a, c, d),
+        _point_segment_distance(b, c, d),
+        _point_segment_distance(c, a, b),
+        _point_segment_distance(d, a, b),
+    )
+
+
+def _check_script_timing(script: list[Step], tick_rate: int) -> None:
+    """Refuse scripts whose ``set`` steps never apply and paths that turn faster than ticks."""
+    timed = [i for i, step in enumerate(script) if not isinstance(step, SetStep)]
+    if not timed:
+        raise _invalid(
+            ("script",),
+            "the script has only set steps, which take no time, so the run would end before "
+            "any change applied; add a reach, follow, wait or sequence step",
+            None,
+        )
+    if timed[-1] < len(script) - 1:
+        raise _invalid(
+            ("script", timed[-1] + 1),
+            "a set step at the end of the script never applies (the run ends with the last "
+            "step that takes time); put it before a step, or add a wait after it",
+            None,
+        )
+    for i, step in enumerate(script):
+        if isinstance(step, SetStep) and step.set.base is not None:
+            ticks = step.set.over * tick_rate
+            if ticks < MIN_TICKS_PER_TURN:
+                raise _invalid(
+                    ("script", i, "set", "over"),
+                    f"{step.set.over:g} s is {ticks:.3g} ticks at {tick_rate} ticks/s; a base "
+                    f"move needs at least {MIN_TICKS_PER_TURN} ticks (over >= "
+                    f"{MIN_TICKS_PER_TURN / tick_rate:.3g} s), or it yanks the chain apart",
+                    step.set.over,
+                )
+            continue
+        if isinstance(step, FollowCircle):
+            turns, field, value = 1.0 / step.period, "period", step.period
+        elif isinstance(step, FollowLissajous):
+            turns, field, value = max(step.frequency), "frequency", list(step.frequency)
+        else:
+            continue
+        if turns * MIN_TICKS_PER_TURN > tick_rate:
+            raise _invalid(
+                ("script", i, field),
+                f"{turns:g} turns per second at {tick_rate} ticks/s leaves "
+                f"{tick_rate / turns:.3g} ticks per turn; at least {MIN_TICKS_PER_TURN} "
+                f"(at most {tick_rate / MIN_TICKS_PER_TURN:g} turns/s, or raise world.tick_rate)",
+                value,
+            )
+
+
 class Level(_Model):
     """A whole level file. Load one with :func:`ikgame.level.loader.load_level`.
 
@@ -690,6 +851,15 @@ class Level(_Model):
                 f"{MAX_TICKS} (shorten the level or lower world.tick_rate)",
                 duration,
             )
+        if round(ticks) < 1:
+            raise _invalid(
+                ("level", "duration"),
+                f"{duration:g} s at {self.world.tick_rate} ticks/s is less than one tick; at "
+                f"least {1 / self.world.tick_rate:.3g} s",
+                duration,
+            )
+        _check_script_timing(self.script, self.world.tick_rate)
+        _check_start_clear(self.chain, self.obstacles)
         steps = step_count(self.script)
         if steps > MAX_STEPS:
             raise _invalid(

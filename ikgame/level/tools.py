@@ -9,7 +9,7 @@ keep ``assets/level.schema.json`` equal to :func:`schema_text` and the reference
 from __future__ import annotations
 
 import json
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from pathlib import Path
 from typing import Final
 
@@ -63,9 +63,12 @@ _SECTIONS: Final = (
 model's docstring (whose doctest has no place in a reference)."""
 
 
-def validate_files(paths: Iterable[str | Path]) -> list[Problem]:
+def validate_files(
+    paths: Iterable[str | Path], check: Callable[[Level, Path], object] | None = None
+) -> list[Problem]:
     """Every problem in every level file (a folder stands for its ``*.toml`` files); empty when
-    all are valid.
+    all are valid. ``check(level, path)`` may look further at each valid level (the files it
+    names) and raise :class:`~ikgame.level.loader.LevelError`.
 
     >>> from ikgame.level.library import LEVELS_DIR
     >>> validate_files([LEVELS_DIR])
@@ -81,7 +84,9 @@ def validate_files(paths: Iterable[str | Path]) -> list[Problem]:
             problems.append(Problem(str(path), None, "", "a folder without level files (*.toml)"))
         for file in files:
             try:
-                load_level(file)
+                level = load_level(file)
+                if check is not None:
+                    check(level, file)
             except LevelError as exc:
                 problems.extend(exc.problems)
     return problems

@@ -325,19 +325,46 @@ class World:
             self.base_body.velocity = (0.0, 0.0)
             self.base_body.position = tuple(move.end)
             self._base_move = None
-        # Solvers need the base where it is now; the Skeleton is frozen, so a new one.
-        self.skeleton = self.skeleton.moved_to(self.base_body.position)
+        # Solvers need the base where it is now; the Skeleton is frozen, so a new one. A base
+        # dragged off by a blow-up keeps the old skeleton: :meth:`diverged` reports it.
+        if np.all(np.isfinite(self.base_body.position)):
+            self.skeleton = self.skeleton.moved_to(self.base_body.position)
 
     def diverged(self) -> bool:
-        """True when any link's or prop's pose is NaN, infinite, or absurdly far away.
+        """True when any link's, prop's or the base's pose is NaN, infinite, or absurdly far.
 
         A blow-up shows in positions within a tick or two, so velocities are not read.
         """
-        bodies = self.bodies + self.prop_bodies
-        values = np.fromiter(
-            (v for b in bodies for v in (*b.position, b.angle)), float, 3 * len(bodies)
-        )
-        return not (np.all(np.isfinite(values)) and np.all(np.abs(values) < DIVERGENCE_LIMIT))
+        bodies = [self.base_body, *self.bodies, *self.prop_bodies]
+        return not np.all(_sane(_poses(bodies)))
+
+    def divergence(self) -> str | None:
+        """The first body that blew up (``"link 3"``, ``"prop 2"``, ``"base"``; counting from
+        1), or None while the world holds together.
+
+        >>> from ikgame.level.model import Level
+        >>> World(Level.model_validate({"level": {"name": "x", "duration": 1.0},
+        ...     "chain": {"links": [{"length": 50.0}]}, "script": [{"wait": 1.0}]})).divergence()
+        """
+        named = [("base", self.base_body)]
+        named += [(f"link {i + 1}", b) for i, b in enumerate(self.bodies)]
+        named += [(f"prop {i + 1}", b) for i, b in enumerate(self.prop_bodies)]
+        sane = _sane(_poses([body for _, body in named]))
+        return next((name for (name, _), ok in zip(named, sane, strict=True) if not ok), None)
+
+
+def _poses(bodies: list[pymunk.Body]) -> np.ndarray:
+    """(k, 3) each body's ``(x, y, angle)``."""
+    values = np.fromiter(
+        (v for b in bodies for v in (*b.position, b.angle)), float, 3 * len(bodies)
+    )
+    return values.reshape(-1, 3)
+
+
+def _sane(poses: np.ndarray) -> np.ndarray:
+    """(k,) bool: which poses are finite and within :data:`DIVERGENCE_LIMIT`."""
+    with np.errstate(invalid="ignore"):
+        return np.all(np.isfinite(poses) & (np.abs(poses) < DIVERGENCE_LIMIT), axis=1)
 
 
 def _obstacle_shape(

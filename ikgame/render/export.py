@@ -17,7 +17,10 @@ import math
 import multiprocessing
 import os
 import re
+import signal
 import sys
+import threading
+import time
 import zlib
 from collections import deque
 from collections.abc import Iterator, Sequence
@@ -51,6 +54,7 @@ SHEET_THUMB_WIDTH = 320  # px, at most
 CHUNK = 8  # frames per worker task: large enough to amortise the round trip, small to balance
 PARALLEL_MIN_FRAMES = 48  # shorter runs finish before worker processes would have started
 MAX_AUTO_WORKERS = 8
+WORKER_PARENT_POLL_S = 0.5  # how soon a worker notices its parent is gone, s
 PNG_COMPRESSION = 1  # zlib level of PNG files: fast; 9 makes them about a third smaller
 _FRAME_NAME = re.compile(r"\d{6}\.png")
 
@@ -133,9 +137,21 @@ class _Job:
 _WORKER_JOB: _Job | None = None
 
 
-def _init_worker(job: _Job) -> None:
+def _init_worker(job: _Job, parent: int) -> None:
     global _WORKER_JOB
     _WORKER_JOB = job
+    # Ctrl-C reaches the whole process group: the parent stops the pool, workers must not die
+    # half-way through a chunk and break it.
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    threading.Thread(target=_exit_with, args=(parent,), daemon=True).start()
+
+
+def _exit_with(parent: int) -> None:
+    """Exit as soon as the parent process is gone, even if it was killed (SIGKILL leaves no
+    chance to shut the pool down): an orphaned worker would draw on for nobody."""
+    while os.getppid() == parent:
+        time.sleep(WORKER_PARENT_POLL_S)
+    os._exit(1)
 
 
 def _worker_payloads(
@@ -194,7 +210,7 @@ def _pool(job: _Job, workers: int) -> Iterator[ProcessPoolExecutor | None]:
         workers,
         mp_context=multiprocessing.get_context("spawn"),
         initializer=_init_worker,
-        initargs=(replace(job, snapshots=()),),
+        initargs=(replace(job, snapshots=()), os.getpid()),
     )
     try:
         yield pool
@@ -388,6 +404,8 @@ def _write_frames(
     animations: list[Path] = []
     frames_dir = out / "frames"
     if frames:
+        if frames_dir.is_symlink():
+            raise ValueError(f"{frames_dir} is a symlink; frames are written only inside {out}")
         frames_dir.mkdir(exist_ok=True)
     with (
         _pool(job, workers) as pool,

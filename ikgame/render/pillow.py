@@ -269,6 +269,8 @@ class _Painter:
         self.camera = camera
         self.theme = theme
         self.ss = ss  # drawing pixels per output pixel
+        # The whole frame in drawing px: what is drawn beyond it is never seen.
+        self.frame = (np.zeros(2), np.array(camera.size, dtype=float))
 
     def px(self, points: object) -> np.ndarray:
         points = np.asarray(points, dtype=float).reshape(-1, 2)
@@ -344,7 +346,7 @@ class _Painter:
         path = upcoming if snapshot.target is None else np.vstack([snapshot.target, upcoming])
         points = self.px(path)
         for a, b in zip(points[:-1], points[1:], strict=True):
-            _dashed(self.draw, a, b, color, width=max(1, round(1.2 * ss)), dash=5 * ss)
+            _dashed(self.draw, a, b, color, self.frame, width=max(1, round(1.2 * ss)), dash=5 * ss)
         for p in self.px(upcoming):
             self.circle(p, UPCOMING_RADIUS * ss, self.theme.background, color, 2 * ss)
 
@@ -536,15 +538,54 @@ def draw_capsule(
 
 
 def _dashed(
-    draw: ImageDraw.ImageDraw, a: np.ndarray, b: np.ndarray, color: RGB, width: int, dash: float
+    draw: ImageDraw.ImageDraw | _Recording,
+    a: np.ndarray,
+    b: np.ndarray,
+    color: RGB,
+    frame: tuple[np.ndarray, np.ndarray],
+    width: int,
+    dash: float,
 ) -> None:
     length = float(np.hypot(*(b - a)))
-    if length < 1e-9:
+    if not (math.isfinite(length) and length >= 1e-9):
         return
     direction = (b - a) / length
-    for start in np.arange(0.0, length, 2 * dash):
+    # Only the part inside the image is dashed (a far target would ask for millions of dashes);
+    # it starts on a whole period so the dashes sit where an unclipped path puts them.
+    visible = _clip(a, direction, length, frame, margin=width + dash)
+    if visible is None:
+        return
+    first = math.floor(visible[0] / (2 * dash)) * 2 * dash
+    for start in np.arange(first, visible[1], 2 * dash):
         p, q = a + direction * start, a + direction * min(start + dash, length)
         draw.line([tuple(p), tuple(q)], fill=color, width=width)
+
+
+def _clip(
+    a: np.ndarray,
+    direction: np.ndarray,
+    length: float,
+    frame: tuple[np.ndarray, np.ndarray],
+    margin: float,
+) -> tuple[float, float] | None:
+    """The distances along ``a + t * direction``, ``0 <= t <= length``, inside the ``frame``
+    (top-left and bottom-right corners) grown by ``margin`` px on every side (Liang-Barsky), or
+    None when the segment misses it.
+
+    >>> corners = (np.array([0.0, 0.0]), np.array([20.0, 10.0]))
+    >>> _clip(np.array([-10.0, 5.0]), np.array([1.0, 0.0]), 100.0, corners, 0.0)
+    (10.0, 30.0)
+    """
+    lo, hi = 0.0, length
+    for axis in (0, 1):
+        low, high = frame[0][axis] - margin, frame[1][axis] + margin
+        if abs(direction[axis]) < 1e-12:
+            if not low <= a[axis] <= high:
+                return None
+            continue
+        t1, t2 = sorted(((low - a[axis]) / direction[axis], (high - a[axis]) / direction[axis]))
+        lo, hi = max(lo, t1), min(hi, t2)
+    return (float(lo), float(hi)) if lo < hi else None
 
 
 def _nice_step(raw: float) -> float:

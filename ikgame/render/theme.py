@@ -9,12 +9,13 @@ from __future__ import annotations
 
 import json
 import os
+import re
 from dataclasses import dataclass, fields
 from pathlib import Path
 
 import ikgame
 
-__all__ = ["RGB", "Theme", "available_themes", "load_theme", "THEMES_DIR"]
+__all__ = ["RGB", "Theme", "ThemeError", "available_themes", "load_theme", "THEMES_DIR"]
 
 RGB = tuple[int, int, int]
 
@@ -22,6 +23,8 @@ RGB = tuple[int, int, int]
 THEMES_DIR = Path(ikgame.__file__).resolve().parent.parent / "assets" / "themes"
 # Keys a theme file may carry besides colours: documentation for whoever edits it.
 _INFO_KEYS = frozenset({"name", "description"})
+MAX_THEME_BYTES = 1_000_000
+"""A theme is a few hundred bytes."""
 
 
 @dataclass(frozen=True)
@@ -87,33 +90,78 @@ def load_theme(name_or_path: str | os.PathLike[str]) -> Theme:
     if looks_like_path:
         path = Path(text)
         if not path.is_file():
-            raise ValueError(f"theme file not found: {path}")
+            raise ThemeError(path, None, "", "theme file not found")
     else:
         path = THEMES_DIR / f"{text}.json"
         if not path.is_file():
             names = ", ".join(available_themes())
             raise ValueError(f"unknown theme {text!r}; available: {names}")
     try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise ValueError(f"theme {path}: cannot read JSON: {exc}") from exc
-    return _theme_from_dict(data, path)
+        with path.open("rb") as handle:
+            raw = handle.read(MAX_THEME_BYTES + 1)
+    except OSError as exc:
+        raise ThemeError(path, None, "", f"cannot be read ({exc.strerror})") from None
+    if len(raw) > MAX_THEME_BYTES:
+        raise ThemeError(path, None, "", f"larger than {MAX_THEME_BYTES} bytes")
+    try:
+        source = raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        line = raw[: exc.start].count(b"\n") + 1
+        raise ThemeError(path, line, "", f"not UTF-8 text ({exc.reason})") from None
+    try:
+        data = json.loads(source)
+    except json.JSONDecodeError as exc:
+        raise ThemeError(path, exc.lineno, "", f"cannot read JSON: {exc.msg}") from None
+    except RecursionError:
+        raise ThemeError(path, None, "", "cannot read JSON: nested too deeply") from None
+    return _theme_from_dict(data, path, source)
 
 
-def _theme_from_dict(data: object, path: Path) -> Theme:
+class ThemeError(ValueError):
+    """A theme file that cannot be used, with where (``file``, ``line`` or None, ``field``)
+    and what is wrong (``reason``).
+
+    >>> str(ThemeError(Path("t.json"), 3, "link", "expected a colour"))
+    't.json:3: link: expected a colour'
+    """
+
+    def __init__(self, file: Path, line: int | None, field: str, reason: str) -> None:
+        self.file, self.line, self.field, self.reason = file, line, field, reason
+        where = str(file) if line is None else f"{file}:{line}"
+        super().__init__(f"{where}: {field}: {reason}" if field else f"{where}: {reason}")
+
+
+def _theme_from_dict(data: object, path: Path, source: str) -> Theme:
     if not isinstance(data, dict):
-        raise ValueError(f"theme {path}: expected a JSON object of colours")
+        raise ThemeError(path, 1, "", "expected a JSON object of colours")
     names = [f.name for f in fields(Theme)]
     unknown = sorted(set(data) - set(names) - _INFO_KEYS)
     if unknown:
-        raise ValueError(f"theme {path}: unknown keys {unknown}; expected {names}")
+        raise ThemeError(
+            path,
+            _key_line(source, unknown[0]),
+            unknown[0],
+            f"unknown keys {unknown}; expected {names}",
+        )
     missing = [name for name in names if name not in data]
     if missing:
-        raise ValueError(f"theme {path}: missing colours {missing}")
-    return Theme(**{name: _parse_color(data[name], f"theme {path}: {name}") for name in names})
+        raise ThemeError(path, None, "", f"missing colours {missing}")
+    colours = {}
+    for name in names:
+        try:
+            colours[name] = _parse_color(data[name])
+        except ValueError as exc:
+            raise ThemeError(path, _key_line(source, name), name, str(exc)) from None
+    return Theme(**colours)
 
 
-def _parse_color(value: object, where: str) -> RGB:
+def _key_line(source: str, key: str) -> int | None:
+    """The line of ``"key":`` in the JSON text, or None."""
+    match = re.search(rf'"{re.escape(key)}"\s*:', source)
+    return None if match is None else source.count("\n", 0, match.start()) + 1
+
+
+def _parse_color(value: object) -> RGB:
     if isinstance(value, str) and len(value) == 7 and value.startswith("#"):
         try:
             return (int(value[1:3], 16), int(value[3:5], 16), int(value[5:7], 16))
@@ -125,4 +173,5 @@ def _parse_color(value: object, where: str) -> RGB:
         and all(isinstance(c, int) and not isinstance(c, bool) and 0 <= c <= 255 for c in value)
     ):
         return (value[0], value[1], value[2])
-    raise ValueError(f"{where}: expected '#rrggbb' or [r, g, b] with 0..255 ints, got {value!r}")
+    shown = repr(value) if len(repr(value)) <= 60 else repr(value)[:57] + "..."
+    raise ValueError(f"expected '#rrggbb' or [r, g, b] with 0..255 ints, got {shown}")

@@ -214,3 +214,24 @@ def test_upcoming_targets_follow_the_current_one():
     assert len(pillow._upcoming(one_per_step, _one_link(step_index=0))) == 2
     done = _one_link(target=targets[0], step_index=4)
     assert len(pillow._upcoming(scene, done)) == 0
+
+
+def test_a_dashed_path_to_a_far_target_draws_only_the_dashes_inside_the_frame():
+    from ikgame.render.pillow import _dashed
+
+    class Lines:
+        def __init__(self):
+            self.drawn = []
+
+        def line(self, xy, fill=None, width=1):
+            self.drawn.append(xy)
+
+    frame = (np.array([0.0, 0.0]), np.array([100.0, 100.0]))
+    far, near = Lines(), Lines()
+    _dashed(far, np.array([50.0, 50.0]), np.array([1e9, 50.0]), (0, 0, 0), frame, 1, 5.0)
+    _dashed(near, np.array([50.0, 50.0]), np.array([120.0, 50.0]), (0, 0, 0), frame, 1, 5.0)
+    assert far.drawn == near.drawn  # the same dashes where they can be seen, none beyond
+    assert len(far.drawn) == 6
+    outside = Lines()
+    _dashed(outside, np.array([-1e9, -5e8]), np.array([1e9, -5e8]), (0, 0, 0), frame, 1, 5.0)
+    assert outside.drawn == []
