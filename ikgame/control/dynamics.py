@@ -248,8 +248,9 @@ def fit_drive(
     low = np.max(np.where(moving, np.minimum(to_upper, to_lower), -np.inf))
     high = np.min(np.where(moving, np.maximum(to_upper, to_lower), np.inf))
     holds = np.all(moving | (np.abs(bias.torques) <= limit))
-    if holds and low <= high and high >= 0.0:
-        scale = max(0.0, min(1.0, high)) if low <= 0.0 else min(1.0, low)
+    # Every joint allows the factors in [low, high]; the largest one up to 1 that all allow wins.
+    if holds and low <= high and low <= 1.0 and high >= 0.0:
+        scale = min(1.0, high)
         accelerations = scale * wanted
         loads = bias + push.scaled(scale)
     else:

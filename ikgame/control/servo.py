@@ -96,6 +96,12 @@ class Servo:
         self._velocities = np.zeros(count)
         self._carried = np.zeros(count)
 
+    @property
+    def stalled(self) -> np.ndarray:
+        """(n,) bool: joints that gave up pushing for their goal at their torque limit (see
+        :meth:`retry`)."""
+        return self._stalled.copy()
+
     def _room(self, torques: np.ndarray, hold: np.ndarray, share: float) -> np.ndarray:
         """The ``share`` of each joint's torque left, beyond its ``hold`` load, on the side of
         ``torques``; at least the floor, as for braking."""

@@ -106,3 +106,15 @@ def test_a_joint_that_cannot_hold_its_load_pushes_at_its_limit_and_the_rest_coas
 def test_chain_inertia_checks_its_shapes():
     with pytest.raises(ValueError, match="must be"):
         ChainInertia(np.ones(2), np.ones(3), np.ones(2))
+
+
+def test_no_factor_is_taken_that_leaves_a_joint_past_its_limit():
+    # Held out sideways the base needs 8e5 against gravity and has 6e5: coasting is past the
+    # limit, and so is the barely different wanted motion. The torques must still be within it.
+    arm = ChainInertia(np.array([100.0, 100.0]), np.full(2, 2.0), np.full(2, 2.0 * 100.0**2 / 12))
+    angles = np.array([0.0, 0.0])
+    limit = np.array([6.0e5, 5.0e5])
+    sag = np.array([-1e-3, 0.0])  # a hair downward: the factor that would fit is huge
+    drive = plan_drive(arm, angles, np.zeros(2), sag, (0.0, -2000.0), limit)
+    assert np.all(np.abs(drive.loads.torques) <= limit * (1 + 1e-9))
+    assert drive.saturated[0]

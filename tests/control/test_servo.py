@@ -52,6 +52,7 @@ def test_a_torque_saturated_arm_comes_to_rest_then_reaches_what_it_can():
     tips = _tip_track(sim, 5.0)
     last = tips[-round(0.5 / sim.dt) :]
     assert np.ptp(last, axis=0).max() < 1.0  # resting where its torque runs out, not swinging
+    assert sim.last_tick.solver_status == "blocked"  # and saying that it cannot get there
     sim.target = (-60.0, -150.0)  # hanging below the base: within the torque budget
     tips = _tip_track(sim, 4.0)
     assert np.hypot(*(tips[-1] - (-60.0, -150.0))) < 1.0
