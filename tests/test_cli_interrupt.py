@@ -5,6 +5,7 @@ and every frame on disk a whole PNG."""
 from __future__ import annotations
 
 import os
+import random
 import signal
 import subprocess
 import sys
@@ -87,13 +88,18 @@ def _temps(out: Path) -> list[Path]:
     return [p for p in out.rglob(".*.tmp")]
 
 
+# Where in the export the signal lands: right at the start and at a seeded random later frame.
+STOP_AT = (2, random.Random(12).randrange(3, 80))
+
+
+@pytest.mark.parametrize("at", STOP_AT)
 @pytest.mark.parametrize(
     "sig, code, word", [(signal.SIGTERM, 143, "terminated"), (signal.SIGINT, 130, "interrupted")]
 )
-def test_a_stopped_export_exits_cleanly_and_keeps_whole_frames(tmp_path, sig, code, word):
+def test_a_stopped_export_exits_cleanly_and_keeps_whole_frames(tmp_path, sig, code, word, at):
     out = tmp_path / "out"
     proc = _start(out, "--workers", "2")
-    _wait_for(lambda: len(_frames(out)) >= 2, "the first frames")
+    _wait_for(lambda: len(_frames(out)) >= at, f"{at} frames")
     workers = _children(proc.pid)
     proc.send_signal(sig)
     _, err = proc.communicate(timeout=120)
@@ -110,10 +116,11 @@ def test_a_stopped_export_exits_cleanly_and_keeps_whole_frames(tmp_path, sig, co
     _wait_for(lambda: not [pid for pid in workers if _alive(pid)], "the workers to exit", 60)
 
 
-def test_after_sigkill_the_workers_die_and_a_forced_rerun_leaves_one_whole_run(tmp_path):
+@pytest.mark.parametrize("at", STOP_AT)
+def test_after_sigkill_the_workers_die_and_a_forced_rerun_leaves_one_whole_run(tmp_path, at):
     out = tmp_path / "out"
     proc = _start(out, "--workers", "2")
-    _wait_for(lambda: len(_frames(out)) >= 2, "the first frames")
+    _wait_for(lambda: len(_frames(out)) >= at, f"{at} frames")
     workers = _children(proc.pid)
     assert workers, "the export runs in worker processes"
     proc.kill()
