@@ -12,6 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ikgame.render.output import whole_pixels
 from ikgame.snapshot import Scene, Snapshot
 
 __all__ = ["Camera", "check_size"]
@@ -29,17 +30,10 @@ def check_size(size: object) -> tuple[int, int]:
     >>> check_size((320, 180))
     (320, 180)
     """
-    try:
-        width, height = size  # type: ignore[misc]
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"size must be a pair (width, height), got {size!r}") from exc
-    for value in (width, height):
-        # bool is an int subclass; (True, True) is a mistake, not a 1x1 image.
-        if isinstance(value, bool) or not isinstance(value, int | np.integer):
-            raise ValueError(f"size must be whole pixels (width, height), got {size!r}")
-        if value <= 0:
-            raise ValueError(f"size must be positive, got {width}x{height}")
-    return int(width), int(height)
+    width, height = whole_pixels(size)
+    if width <= 0 or height <= 0:
+        raise ValueError(f"size must be positive, got {width}x{height}")
+    return width, height
 
 
 @dataclass(frozen=True)

@@ -11,7 +11,15 @@ import re
 from numbers import Integral
 from pathlib import Path
 
-__all__ = ["MAX_PIXELS", "MAX_SIDE", "MIN_SIDE", "check_export_size", "check_out_dir", "parse_size"]
+__all__ = [
+    "MAX_PIXELS",
+    "MAX_SIDE",
+    "MIN_SIDE",
+    "check_export_size",
+    "check_out_dir",
+    "parse_size",
+    "whole_pixels",
+]
 
 MIN_SIDE = 16  # px: below this the HUD and markers cannot fit
 MAX_SIDE = 3840  # px, either side
@@ -31,11 +39,11 @@ def parse_size(text: str) -> tuple[int, int]:
     return check_export_size((int(match[1]), int(match[2])))
 
 
-def check_export_size(size: object) -> tuple[int, int]:
-    """``size`` as ``(width, height)`` ints if it is a frame size an export accepts, else
-    ``ValueError`` saying why. NumPy integers count as whole pixels; bools do not.
+def whole_pixels(size: object) -> tuple[int, int]:
+    """``size`` as a ``(width, height)`` pair of ints, else ``ValueError``. NumPy integers count
+    as whole pixels; bools do not ((True, True) is a mistake, not a 1x1 image).
 
-    >>> check_export_size((64, 48))
+    >>> whole_pixels((64, 48))
     (64, 48)
     """
     try:
@@ -44,6 +52,17 @@ def check_export_size(size: object) -> tuple[int, int]:
         raise ValueError(f"size must be a pair (width, height), got {size!r}") from exc
     if any(isinstance(v, bool) or not isinstance(v, Integral) for v in (width, height)):
         raise ValueError(f"size must be whole pixels (width, height), got {size!r}")
+    return int(width), int(height)
+
+
+def check_export_size(size: object) -> tuple[int, int]:
+    """``size`` as ``(width, height)`` ints if it is a frame size an export accepts, else
+    ``ValueError`` saying why. NumPy integers count as whole pixels; bools do not.
+
+    >>> check_export_size((64, 48))
+    (64, 48)
+    """
+    width, height = whole_pixels(size)
     if not (
         MIN_SIDE <= width <= MAX_SIDE
         and MIN_SIDE <= height <= MAX_SIDE
