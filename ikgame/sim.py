@@ -281,13 +281,16 @@ class Simulation:
         status = command.solution.status.value
         if target is not None and self._blocked_target is None:
             reachable = command.solution.status is not SolveStatus.FAILURE
-            # A joint that stalled at its torque limit has stopped pushing, but only because
-            # pushing got it nowhere.
-            pushing = (
-                bool(limited.any())
-                or bool(self.controller.servo.stalled.any())
-                or (reachable and self.world.touching())
-            )
+
+            def pushing() -> bool:
+                # A joint that stalled at its torque limit has stopped pushing, but only because
+                # pushing got it nowhere.
+                return (
+                    bool(limited.any())
+                    or bool(self.controller.servo.stalled.any())
+                    or self.world.touching()
+                )
+
             if self._watch.observe(error=error, reachable=reachable, pushing=pushing):
                 self._blocked_target = target.copy()
                 self.controller.hold(self.world.joint_angles())

@@ -13,6 +13,7 @@ Times are s, distances px.
 from __future__ import annotations
 
 from collections import deque
+from collections.abc import Callable
 from typing import Final
 
 __all__ = ["BlockWatch"]
@@ -31,9 +32,9 @@ class BlockWatch:
     """Watches one chain's progress toward its target, tick by tick.
 
     >>> watch = BlockWatch(dt=0.1, arrival=0.5)
-    >>> [watch.observe(error=40.0, reachable=True, pushing=True) for _ in range(7)][-1]
+    >>> [watch.observe(error=40.0, reachable=True, pushing=lambda: True) for _ in range(7)][-1]
     True
-    >>> watch.observe(error=20.0, reachable=True, pushing=True)  # getting closer again
+    >>> watch.observe(error=20.0, reachable=True, pushing=lambda: True)  # getting closer again
     False
     """
 
@@ -41,26 +42,24 @@ class BlockWatch:
         if not dt > 0:
             raise ValueError(f"dt must be a positive number of seconds, got {dt!r}")
         self._errors: deque[float] = deque(maxlen=max(2, round(WINDOW / dt) + 1))
-        self._pushes: deque[bool] = deque(maxlen=self._errors.maxlen)
         self._near = max(NEAR * arrival, 1.0)
 
     def reset(self) -> None:
         """Forget the history: the target moved, so progress is measured afresh."""
         self._errors.clear()
-        self._pushes.clear()
 
-    def observe(self, *, error: float, reachable: bool, pushing: bool) -> bool:
+    def observe(self, *, error: float, reachable: bool, pushing: Callable[[], bool]) -> bool:
         """Record one tick and say whether the chain is blocked now.
 
         ``error`` is the end effector's distance to the target (px), ``reachable`` whether the
-        solver has not given the target up as out of reach, ``pushing`` whether a motor was at its torque limit
-        or a link touched something this tick.
+        solver has not given the target up as out of reach; ``pushing()`` says whether a motor
+        is at its torque limit or a link touches something, and is asked only once the error
+        has stopped moving (a contact query on every tick would cost more than the rest).
         """
         self._errors.append(error)
-        self._pushes.append(pushing)
         if not reachable or error <= self._near or len(self._errors) < self._errors.maxlen:
             return False
         # Stuck means the error has stayed within one band for the whole window: a target that
         # has just jumped away, or a chain bouncing off something, moves the error a lot.
         stuck = max(self._errors) - min(self._errors) < PROGRESS
-        return stuck and sum(self._pushes) * 2 >= len(self._pushes)
+        return stuck and pushing()

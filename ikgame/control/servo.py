@@ -58,14 +58,12 @@ class ServoCommand:
         torques: (n,) feed-forward joint torques, within the limits.
         forces: (n, 2) feed-forward pivot forces (parent on child, world frame).
         budgets: (n,) torque each motor may still add to correct errors, >= 0.
-        saturated: (n,) bool, joints whose feed-forward torque is at its limit.
     """
 
     rates: np.ndarray
     torques: np.ndarray
     forces: np.ndarray
     budgets: np.ndarray
-    saturated: np.ndarray
 
 
 class Servo:
@@ -74,8 +72,8 @@ class Servo:
     >>> servo = Servo(ChainInertia(np.array([10.0]), np.array([2.0]), np.array([50.0 / 3.0])),
     ...               max_torque=np.array([1.0e6]), max_speed=np.array([2.0]), gain=12.0)
     >>> command = servo.command(np.array([1.0]), np.zeros(1), np.zeros(1), (0.0, 0.0), 1 / 240)
-    >>> command.rates.round(6).tolist(), command.saturated.tolist()
-    ([2.0], [False])
+    >>> command.rates.round(6).tolist(), command.budgets.round(1).tolist()
+    ([2.0], [968000.0])
     """
 
     def __init__(
@@ -198,7 +196,6 @@ class Servo:
             torques=drive.loads.torques,
             forces=drive.loads.forces,
             budgets=np.maximum(self.max_torque - np.abs(drive.loads.torques), 0.0),
-            saturated=drive.saturated,
         )
 
 

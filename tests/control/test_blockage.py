@@ -8,7 +8,7 @@ from ikgame.sim import Simulation
 
 
 def _run(watch, errors, *, reachable=True, pushing=True):
-    return [watch.observe(error=e, reachable=reachable, pushing=pushing) for e in errors]
+    return [watch.observe(error=e, reachable=reachable, pushing=lambda: pushing) for e in errors]
 
 
 def test_no_progress_while_pushing_is_blocked_after_the_window():
