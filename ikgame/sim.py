@@ -181,6 +181,7 @@ class Simulation:
         self._watch = BlockWatch(dt=self.dt, arrival=level.chain.arrival)
         self._blocked_target: np.ndarray | None = None
         self._blocked_in_step = False
+        self._effector = self.world.end_effector()
         if self._has_goals:
             self.goals.observe(0.0, self.world.prop_states())
 
@@ -233,7 +234,7 @@ class Simulation:
         if info is None:
             return self._last
         finished = len(self.script.outcomes)
-        self.script.observe(self.time, self.dt, self.world.end_effector())
+        self.script.observe(self.time, self.dt, self._effector)
         self._note_blocked(finished)
         if self._has_goals:
             self.goals.observe(self.time, self.world.prop_states())
@@ -275,7 +276,7 @@ class Simulation:
         if self.world.skeleton is not self.controller.skeleton:
             # The base moved: the solver must work from where it is now.
             self.controller.skeleton = self.world.skeleton
-        effector = self.world.end_effector()
+        effector = self._effector = self.world.end_effector()
         error = math.nan if target is None else float(np.hypot(*(effector - target)))
         limited = self.world.torque_limited()
         status = command.solution.status.value

@@ -83,6 +83,7 @@ class Controller:
         # chain's answer is cached, by one solver object that lives with the chain.
         self.solver = RobustSolver(skeleton, solver)
         """The chain's solver, with recovery and a cache (see :class:`RobustSolver`)."""
+        self.skeleton = skeleton
         self.max_speed = np.asarray(max_speed, dtype=float)
         self.servo = servo
         self.gain = gain
@@ -114,6 +115,8 @@ class Controller:
     @skeleton.setter
     def skeleton(self, skeleton: Skeleton) -> None:
         self.solver.skeleton = skeleton
+        # The damping of the target's pseudo-inverse (see _goal_rates), px^2, per chain.
+        self._damping = (0.01 * skeleton.reach) ** 2 * np.eye(2)
 
     @property
     def solver_name(self) -> str:
@@ -142,8 +145,7 @@ class Controller:
         if not np.any(velocity):
             return None
         arms = jacobian(self.skeleton, measured)
-        damping = (0.01 * self.skeleton.reach) ** 2
-        rates = arms.T @ np.linalg.solve(arms @ arms.T + damping * np.eye(2), velocity)
+        rates = arms.T @ np.linalg.solve(arms @ arms.T + self._damping, velocity)
         over = float(np.max(np.abs(rates) / self.max_speed))
         if over > JUMP:
             return None
