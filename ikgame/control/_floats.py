@@ -246,3 +246,41 @@ def fit_floats(
         loads = ([min(max(b, -lim), lim) for b, lim in zip(bt, limits, strict=True)], bx, by)
     saturated = [abs(t) >= lim * (1.0 - 1e-9) for t, lim in zip(loads[0], limits, strict=True)]
     return accelerations, loads, saturated, consistent
+
+
+def damped_rates(
+    lengths: list[float],
+    base: tuple[float, float],
+    base_angle: float,
+    angles: list[float],
+    velocity: tuple[float, float],
+    damping: float,
+) -> list[float]:
+    """Joint rates (rad/s) that move a serial chain's end effector at ``velocity`` (px/s):
+    ``J^T (J J^T + damping I)^-1 v``, the damped least-norm answer, with ``damping`` in px^2.
+
+    >>> [round(r, 6) for r in damped_rates([10.0], (0.0, 0.0), 0.0, [0.0], (0.0, 10.0), 1.0)]
+    [0.990099]
+    """
+    xs, ys = [], []
+    x, y = base
+    heading = base_angle
+    for length, angle in zip(lengths, angles, strict=True):
+        xs.append(x)
+        ys.append(y)
+        heading += angle
+        x += length * math.cos(heading)
+        y += length * math.sin(heading)
+    # Column i of the Jacobian is the arm from joint i to the end, turned a quarter turn.
+    arms_x = [x - joint for joint in xs]
+    arms_y = [y - joint for joint in ys]
+    a = d = damping
+    b = 0.0
+    for ax, ay in zip(arms_x, arms_y, strict=True):
+        a += ay * ay
+        b -= ay * ax
+        d += ax * ax
+    det = a * d - b * b
+    vx, vy = velocity
+    u, w = (d * vx - b * vy) / det, (a * vy - b * vx) / det
+    return [ax * w - ay * u for ax, ay in zip(arms_x, arms_y, strict=True)]

@@ -19,7 +19,8 @@ from typing import Final
 
 import numpy as np
 
-from ikgame.control.servo import Servo, ServoCommand
+from ikgame.control._floats import damped_rates
+from ikgame.control.servo import FLOAT_LINKS, Servo, ServoCommand
 from ikgame.kinematics import RobustSolver, Skeleton, Solution, SolveStatus, wrap_angle
 from ikgame.kinematics.jacobian import jacobian
 
@@ -116,7 +117,7 @@ class Controller:
     def skeleton(self, skeleton: Skeleton) -> None:
         self.solver.skeleton = skeleton
         # The damping of the target's pseudo-inverse (see _goal_rates), px^2, per chain.
-        self._damping = (0.01 * skeleton.reach) ** 2 * np.eye(2)
+        self._damping = (0.01 * skeleton.reach) ** 2
 
     @property
     def solver_name(self) -> str:
@@ -142,10 +143,19 @@ class Controller:
         if target is None or previous is None:
             return None
         velocity = (target - previous) / dt
-        if not np.any(velocity):
+        if not velocity.any():
             return None
-        arms = jacobian(self.skeleton, measured)
-        rates = arms.T @ np.linalg.solve(arms @ arms.T + self._damping, velocity)
+        skeleton, damping = self.skeleton, self._damping
+        if skeleton.count <= FLOAT_LINKS:
+            base = (float(skeleton.base[0]), float(skeleton.base[1]))
+            lengths, angles = skeleton.lengths.tolist(), measured.tolist()
+            vx, vy = velocity.tolist()
+            rates = np.array(
+                damped_rates(lengths, base, skeleton.base_angle, angles, (vx, vy), damping)
+            )
+        else:
+            arms = jacobian(skeleton, measured)
+            rates = arms.T @ np.linalg.solve(arms @ arms.T + damping * np.eye(2), velocity)
         over = float(np.max(np.abs(rates) / self.max_speed))
         if over > JUMP:
             return None
@@ -201,7 +211,7 @@ class Controller:
         if velocities is None or dt is None:
             raise ValueError("a controller with a servo needs the joint velocities and dt")
         moved = target is not None and (
-            self._last_target is None or np.any(target != self._last_target)
+            self._last_target is None or bool((target != self._last_target).any())
         )
         if moved:
             # The goal may be within the torque budget now: stalled joints try again.
