@@ -379,7 +379,7 @@ class World:
         """
         state, _ = self._state()
         # NaN fails the comparison too.
-        return not float(np.max(np.abs(state[:, :3]))) < DIVERGENCE_LIMIT
+        return not float(np.abs(state[:, :3]).max()) < DIVERGENCE_LIMIT
 
     def divergence(self) -> str | None:
         """The first body that blew up (``"link 3"``, ``"prop 2"``, ``"base"``; counting from
