@@ -91,6 +91,7 @@ class Controller:
         self.iterations = int(iterations)
         self.arrival = float(arrival)
         self._limited = skeleton.limited
+        self._all_limited = bool(self._limited.all())
         self._held: np.ndarray | None = None
         self._holding = False
         self._last_target: np.ndarray | None = None
@@ -199,7 +200,10 @@ class Controller:
                 self._held = self.skeleton.clamp(measured.copy())
             solution = Solution(self._held, SolveStatus.SUCCESS, 0, 0.0)
         else:
-            start = np.where(self._limited, measured, [wrap_angle(a) for a in measured])
+            if self._all_limited:
+                start = np.array(measured, dtype=float)  # nothing to wrap
+            else:
+                start = np.where(self._limited, measured, [wrap_angle(a) for a in measured])
             solution = self.solver.solve(
                 start, target, max_iterations=self.iterations, tolerance=self.arrival
             )
