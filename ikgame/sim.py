@@ -258,10 +258,11 @@ class Simulation:
         physics blew up."""
         target = self.target
         self._release_if_moved(target)
+        angles, velocities = self.world.joint_state()
         command = self.controller.command(
-            self.world.joint_angles(),
+            angles,
             target,
-            velocities=self.world.joint_velocities(),
+            velocities=velocities,
             gravity=self.world.gravity,
             dt=self.dt,
         )

@@ -202,6 +202,19 @@ class World:
         state, rows = self._state()
         return state[rows.links, 3] - state[rows.parents, 3]
 
+    def joint_state(self) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`joint_angles` and :meth:`joint_velocities` from one read of the bodies.
+
+        >>> from ikgame.level.model import Level
+        >>> world = World(Level.model_validate({"level": {"name": "x", "duration": 1.0},
+        ...     "chain": {"links": [{"length": 50.0}]}, "script": [{"wait": 1.0}]}))
+        >>> [a.tolist() for a in world.joint_state()]
+        [[0.0], [0.0]]
+        """
+        state, rows = self._state()
+        links, parents = state[rows.links], state[rows.parents]
+        return links[:, 2] - parents[:, 2], links[:, 3] - parents[:, 3]
+
     def _state(self) -> tuple[np.ndarray, _Rows]:
         """Every body's x, y, angle and angular velocity in one read (a view of a buffer the
         next read reuses), and which rows are whose."""
