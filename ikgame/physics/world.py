@@ -61,11 +61,13 @@ def build_skeleton(level: Level) -> Skeleton:
     150.0
     """
     links = level.chain.expanded_links
-    return Skeleton.chain(
+    return Skeleton.tree(
         [link.length for link in links],
+        [link.parent_index for link in links],
         base=level.chain.base,
         base_angle=math.radians(level.chain.angle),
         limits=[link.limits_rad for link in links],
+        root_offsets=[link.at for link in links],
     )
 
 
@@ -92,7 +94,7 @@ class World:
         self.space.add(self.base_body)
 
         links = level.chain.expanded_links
-        initial = self.skeleton.clamp(np.zeros(self.skeleton.count))
+        initial = self.skeleton.clamp(np.radians([link.angle for link in links]))
         self.max_torque = np.array([link.max_torque for link in links])
         self.max_speed = np.radians([link.max_speed for link in links])
         self.link_widths = np.array([link.width for link in links])
@@ -103,14 +105,30 @@ class World:
         self.limit_joints: list[pymunk.RotaryLimitJoint | None] = []
         shape_filter = pymunk.ShapeFilter(group=_CHAIN_GROUP)
 
-        parent = self.base_body
-        parent_anchor = (0.0, 0.0)
-        joint = np.asarray(level.chain.base, dtype=float)
-        world_angle = self.skeleton.base_angle
+        self.parents = self.skeleton.parents
+        """(n,) parent link index, -1 for a link on the base."""
+        self.effector_links = np.array(level.chain.effector_links, dtype=np.int64)
+        """(k,) the links whose tips are end effectors."""
+        base_direction = _direction(self.skeleton.base_angle)
+        base_normal = np.array((-base_direction[1], base_direction[0]))
+        ends = np.empty((len(links), 2))
+        world_angles = np.empty(len(links))
         for i, link in enumerate(links):
             half = link.length / 2.0
-            world_angle += initial[i]
-            direction = np.array((math.cos(world_angle), math.sin(world_angle)))
+            p = int(self.parents[i])
+            if p < 0:
+                offset = self.skeleton.root_offsets[i]
+                parent, parent_anchor = self.base_body, (float(offset[0]), float(offset[1]))
+                joint = np.asarray(level.chain.base, dtype=float)
+                if np.any(offset):
+                    joint = joint + offset[0] * base_direction + offset[1] * base_normal
+                world_angle = self.skeleton.base_angle + initial[i]
+            else:
+                parent, parent_anchor = self.bodies[p], (self._halves[p], 0.0)
+                joint, world_angle = ends[p], world_angles[p] + initial[i]
+            direction = _direction(world_angle)
+            world_angles[i] = world_angle
+            ends[i] = joint + link.length * direction
             radius = link.width / 2.0
             body = pymunk.Body(
                 link.mass, pymunk.moment_for_segment(link.mass, (-half, 0), (half, 0), radius)
@@ -133,9 +151,6 @@ class World:
             self.bodies.append(body)
             self.motors.append(motor)
             self.limit_joints.append(limit_joint)
-            parent = body
-            parent_anchor = (half, 0.0)
-            joint = joint + link.length * direction
 
         for obstacle in level.obstacles:
             self.space.add(_obstacle_shape(self.space.static_body, obstacle))
@@ -165,8 +180,7 @@ class World:
         3 pi; limited joints read in the same frame as their limits.
         """
         angles = np.fromiter((b.angle for b in self.bodies), float, self.count)
-        parents = np.concatenate(([self.base_body.angle], angles[:-1]))
-        return angles - parents
+        return angles - self._of_parents(angles, self.base_body.angle)
 
     def link_angles(self) -> np.ndarray:
         """(n,) world angle of each link, radians (continuous, not wrapped)."""
@@ -180,19 +194,43 @@ class World:
     def joint_velocities(self) -> np.ndarray:
         """(n,) relative angular velocity of each joint (child - parent), rad/s."""
         w = np.fromiter((b.angular_velocity for b in self.bodies), float, self.count)
-        return w - np.concatenate(([self.base_body.angular_velocity], w[:-1]))
+        return w - self._of_parents(w, self.base_body.angular_velocity)
+
+    def _of_parents(self, values: np.ndarray, base: float) -> np.ndarray:
+        """(n,) each link's parent's entry of ``values``, ``base`` for the links on the base."""
+        if self.skeleton.is_chain:
+            return np.concatenate(([base], values[:-1]))
+        return np.where(self.parents < 0, base, values[self.parents])
+
+    def _children_sum(self, values: np.ndarray) -> np.ndarray:
+        """Each link's sum of ``values`` over its children (zero for a tip)."""
+        if self.skeleton.is_chain:
+            return np.concatenate((values[1:], np.zeros_like(values[:1])))
+        total = np.zeros_like(values)
+        inner = self.parents >= 0
+        np.add.at(total, self.parents[inner], values[inner])
+        return total
 
     def joint_positions(self) -> np.ndarray:
-        """(n + 1, 2) world positions of the joints, then the end effector, px."""
-        points = np.empty((self.count + 1, 2))
-        for i, body in enumerate(self.bodies):
-            points[i] = body.local_to_world((-self._halves[i], 0.0))
-        points[-1] = self.end_effector()
-        return points
+        """World positions of the joints, px: for a chain (n + 1, 2), joint 0 .. joint n-1 then
+        the end effector; for a tree (2n, 2), the n link starts then the n link ends (the layout
+        of :func:`~ikgame.kinematics.forward_kinematics`)."""
+        starts = [b.local_to_world((-h, 0.0)) for b, h in zip(self.bodies, self._halves, strict=True)]
+        if self.skeleton.is_chain:
+            return np.array([*starts, self.end_effector()], dtype=float)
+        ends = [b.local_to_world((h, 0.0)) for b, h in zip(self.bodies, self._halves, strict=True)]
+        return np.array(starts + ends, dtype=float)
 
     def end_effector(self) -> np.ndarray:
-        """(2,) world position of the chain's tip, px."""
-        return np.array(self.bodies[-1].local_to_world((self._halves[-1], 0.0)))
+        """(2,) world position of the first end effector (a chain's tip), px."""
+        return self.effector_positions()[0]
+
+    def effector_positions(self) -> np.ndarray:
+        """(k, 2) world position of each end effector, px, in :attr:`effector_links` order."""
+        return np.array(
+            [self.bodies[i].local_to_world((self._halves[i], 0.0)) for i in self.effector_links],
+            dtype=float,
+        )
 
     def set_rates(self, rates: np.ndarray) -> None:
         """Ask each joint's motor for a relative angular velocity (child - parent), rad/s.
@@ -231,10 +269,10 @@ class World:
         """
         angles = self.link_angles()
         halves = (0.5 * self._lengths)[:, None] * np.stack((np.cos(angles), np.sin(angles)), -1)
-        beyond_forces = np.concatenate((forces[1:], np.zeros((1, 2))))
-        beyond_torques = np.concatenate((torques[1:], np.zeros(1)))
+        beyond_forces = self._children_sum(forces)
+        beyond_torques = self._children_sum(torques)
         pair = forces + beyond_forces
-        # Each body takes its joint's loads and the reactions of the next joint's, both acting at
+        # Each body takes its joint's loads and the reactions of its children's, both acting at
         # the link's ends, so the pivot forces turn it about its centre too.
         body_torques = (
             torques - beyond_torques - (halves[:, 0] * pair[:, 1] - halves[:, 1] * pair[:, 0])
@@ -351,6 +389,11 @@ class World:
         named += [(f"prop {i + 1}", b) for i, b in enumerate(self.prop_bodies)]
         sane = _sane(_poses([body for _, body in named]))
         return next((name for (name, _), ok in zip(named, sane, strict=True) if not ok), None)
+
+
+def _direction(angle: float) -> np.ndarray:
+    """(2,) unit vector at ``angle`` radians."""
+    return np.array((math.cos(angle), math.sin(angle)))
 
 
 def _poses(bodies: list[pymunk.Body]) -> np.ndarray:
