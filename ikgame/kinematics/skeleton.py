@@ -199,7 +199,7 @@ class Skeleton:
             upper=np.asarray(upper, dtype=float),
             base=np.asarray(base, dtype=float),
             base_angle=base_angle,
-            root_offsets=None if root_offsets is None else np.asarray(root_offsets, dtype=float),
+            root_offsets=root_offsets,  # type: ignore[arg-type]  # checked and converted there
         )
 
     @property
