@@ -26,6 +26,7 @@ from typing import Final
 
 import numpy as np
 
+from ikgame.kinematics._floats import check_chain
 from ikgame.kinematics.ccd import TRIVIAL_ARC_LENGTH
 from ikgame.kinematics.skeleton import Skeleton, check_angles, check_point
 from ikgame.kinematics.solver import Solution, SolveStatus
@@ -111,7 +112,7 @@ def jacobian(skeleton: Skeleton, angles: np.ndarray) -> np.ndarray:
     >>> jacobian(Skeleton.chain([10, 10]), np.zeros(2))[1].tolist()
     [20.0, 10.0]
     """
-    _check_chain(skeleton)
+    check_chain(skeleton)
     points = _chain_points(skeleton, check_angles(angles, skeleton.count))
     arms = points[-1] - points[:-1]
     return np.vstack((-arms[:, 1], arms[:, 0]))
@@ -330,11 +331,6 @@ def _escape_saddle(
     return best
 
 
-def _check_chain(skeleton: Skeleton) -> None:
-    if not skeleton.is_chain:
-        raise ValueError("this solver needs a serial chain (parents[i] == i - 1)")
-
-
 def _check_solve_inputs(
     skeleton: Skeleton,
     angles: object,
@@ -346,7 +342,7 @@ def _check_solve_inputs(
 
     The start is a new array, so a solver never changes the caller's angles.
     """
-    _check_chain(skeleton)
+    check_chain(skeleton)
     tol = _check_settings(max_iterations, tolerance)
     start = skeleton.clamp(check_angles(angles, skeleton.count))
     return start, check_point(target), tol

@@ -13,9 +13,12 @@ from typing import Final
 from ikgame.kinematics.ccd import solve_ccd
 from ikgame.kinematics.fabrik import solve_fabrik
 from ikgame.kinematics.jacobian import solve_dls, solve_jacobian_transpose
-from ikgame.kinematics.solver import Solver
+from ikgame.kinematics.multi_ccd import solve_ccd_targets
+from ikgame.kinematics.multi_fabrik import solve_fabrik_targets
+from ikgame.kinematics.multi_jacobian import solve_dls_targets, solve_jacobian_transpose_targets
+from ikgame.kinematics.solver import Solver, TargetSolver
 
-__all__ = ["SOLVERS", "get_solver"]
+__all__ = ["SOLVERS", "TARGET_SOLVERS", "get_solver", "get_target_solver"]
 
 SOLVERS: Final[Mapping[str, Solver]] = MappingProxyType(
     {
@@ -26,6 +29,17 @@ SOLVERS: Final[Mapping[str, Solver]] = MappingProxyType(
     }
 )
 """Every solver by the name a level file uses for it (read-only)."""
+
+TARGET_SOLVERS: Final[Mapping[str, TargetSolver]] = MappingProxyType(
+    {
+        "ccd": solve_ccd_targets,
+        "dls": solve_dls_targets,
+        "fabrik": solve_fabrik_targets,
+        "jacobian_transpose": solve_jacobian_transpose_targets,
+    }
+)
+"""Every multi-target solver (skeleton trees, a :class:`~ikgame.kinematics.targets.TargetSet`)
+by the same names (read-only)."""
 
 
 def get_solver(name: str) -> Solver:
@@ -38,4 +52,17 @@ def get_solver(name: str) -> Solver:
         return SOLVERS[name]
     except (KeyError, TypeError):
         choices = ", ".join(sorted(SOLVERS))
+        raise ValueError(f"unknown solver {name!r}; choose one of: {choices}") from None
+
+
+def get_target_solver(name: str) -> TargetSolver:
+    """The multi-target solver called ``name``, or ``ValueError`` naming the choices.
+
+    >>> get_target_solver("fabrik") is solve_fabrik_targets
+    True
+    """
+    try:
+        return TARGET_SOLVERS[name]
+    except (KeyError, TypeError):
+        choices = ", ".join(sorted(TARGET_SOLVERS))
         raise ValueError(f"unknown solver {name!r}; choose one of: {choices}") from None
