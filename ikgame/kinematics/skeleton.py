@@ -17,6 +17,7 @@ Angles are radians, lengths and positions pixels, world y points up.
 from __future__ import annotations
 
 import copy
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import cached_property
@@ -299,8 +300,9 @@ class Skeleton:
             depth += np.hypot(*self.root_offsets[self.roots].T)
         return float(depth.max())
 
-    def moved_to(self, base: Sequence[float] | np.ndarray) -> Skeleton:
-        """The same skeleton with its base at ``base`` (px).
+    def moved_to(self, base: Sequence[float] | np.ndarray, angle: float | None = None) -> Skeleton:
+        """The same skeleton with its base at ``base`` (px), turned to ``angle`` (radians) if
+        given.
 
         Cheap enough to call every tick while a base moves: only the new point is checked,
         the already validated arrays are shared.
@@ -312,6 +314,10 @@ class Skeleton:
         point.setflags(write=False)
         moved = copy.copy(self)
         object.__setattr__(moved, "base", point)
+        if angle is not None:
+            if not math.isfinite(angle):
+                raise ValueError(f"angle must be finite, got {angle!r}")
+            object.__setattr__(moved, "base_angle", float(angle))
         return moved
 
     def clamp(self, angles: np.ndarray) -> np.ndarray:

@@ -42,10 +42,13 @@ _OBSTACLE_ELASTICITY: Final = 1.0
 
 @dataclass
 class _BaseMove:
-    """A move of the kinematic base under way: from ``start`` to ``end`` (px) in ``over`` s."""
+    """A move of the kinematic base under way: from ``start`` to ``end`` (px) and from
+    ``start_angle`` to ``end_angle`` (radians) in ``over`` s."""
 
     start: np.ndarray
     end: np.ndarray
+    start_angle: float
+    end_angle: float
     over: float
     elapsed: float = 0.0
 
@@ -227,9 +230,12 @@ class World:
 
     def effector_positions(self) -> np.ndarray:
         """(k, 2) world position of each end effector, px, in :attr:`effector_links` order."""
+        return self.link_ends(self.effector_links)
+
+    def link_ends(self, links: np.ndarray) -> np.ndarray:
+        """(m, 2) world position of the far end of each of ``links`` (indices), px."""
         return np.array(
-            [self.bodies[i].local_to_world((self._halves[i], 0.0)) for i in self.effector_links],
-            dtype=float,
+            [self.bodies[i].local_to_world((self._halves[i], 0.0)) for i in links], dtype=float
         )
 
     def set_rates(self, rates: np.ndarray) -> None:
@@ -311,8 +317,11 @@ class World:
         """Change gravity from now on, px/s^2."""
         self.space.gravity = gravity
 
-    def move_base(self, to: tuple[float, float], over: float) -> None:
-        """Move the chain's base to ``to`` (px) over the next ``over`` seconds, then stop there.
+    def move_base(
+        self, to: tuple[float, float] | None, over: float, angle: float | None = None
+    ) -> None:
+        """Move the chain's base to ``to`` (px) and turn it to ``angle`` (radians, the shorter
+        way round) over the next ``over`` seconds, then stop there; None keeps either as is.
 
         The kinematic base body is given the velocity that keeps it on a smoothstep profile (at
         rest at both ends, so the chain is not jerked), which pymunk integrates exactly; the last
@@ -329,7 +338,12 @@ class World:
         if not (math.isfinite(over) and over > 0):
             raise ValueError(f"over must be a positive number of seconds, got {over!r}")
         start = np.array(self.base_body.position)
-        self._base_move = _BaseMove(start, np.asarray(to, dtype=float), float(over))
+        end = start if to is None else np.asarray(to, dtype=float)
+        start_angle = float(self.base_body.angle)
+        end_angle = start_angle
+        if angle is not None:
+            end_angle = start_angle + math.remainder(angle - start_angle, math.tau)
+        self._base_move = _BaseMove(start, end, start_angle, end_angle, float(over))
 
     def prop_states(self) -> np.ndarray:
         """(p, 3) each prop's ``(x, y, angle)``: centre in px, angle in radians.
@@ -358,15 +372,24 @@ class World:
         eased = fraction * fraction * (3.0 - 2.0 * fraction)
         wanted = move.start + (move.end - move.start) * eased
         self.base_body.velocity = tuple((wanted - np.array(self.base_body.position)) / dt)
+        turning = move.end_angle != move.start_angle
+        if turning:
+            wanted_angle = move.start_angle + (move.end_angle - move.start_angle) * eased
+            self.base_body.angular_velocity = (wanted_angle - self.base_body.angle) / dt
         self.space.step(dt)
         if fraction >= 1.0:
             self.base_body.velocity = (0.0, 0.0)
             self.base_body.position = tuple(move.end)
+            self.base_body.angular_velocity = 0.0
+            if turning:
+                self.base_body.angle = move.end_angle
             self._base_move = None
         # Solvers need the base where it is now; the Skeleton is frozen, so a new one. A base
         # dragged off by a blow-up keeps the old skeleton: :meth:`diverged` reports it.
-        if np.all(np.isfinite(self.base_body.position)):
-            self.skeleton = self.skeleton.moved_to(self.base_body.position)
+        if np.all(np.isfinite(self.base_body.position)) and math.isfinite(self.base_body.angle):
+            self.skeleton = self.skeleton.moved_to(
+                self.base_body.position, self.base_body.angle if turning else None
+            )
 
     def diverged(self) -> bool:
         """True when any link's, prop's or the base's pose is NaN, infinite, or absurdly far.
