@@ -119,9 +119,10 @@ class Terrain:
         ends = np.roll(corners, -1, axis=1)
         self._edge_start = corners
         self._edge_delta = ends - corners
-        # Vertical edges meet a vertical ray only at their ends, which the next edges hold.
         self._edge_vertical = self._edge_delta[..., 0] == 0
         self._edge_dx = np.where(self._edge_vertical, 1.0, self._edge_delta[..., 0])
+        self._edge_low = np.minimum(corners[..., 1], ends[..., 1])
+        self._edge_high = np.maximum(corners[..., 1], ends[..., 1])
         self._discs = np.concatenate([np.hstack([a, radius]), np.hstack([b, radius]), circs])
 
     def heights(self, xs: ArrayLike, y_from: ArrayLike) -> np.ndarray:
@@ -140,11 +141,14 @@ class Terrain:
         disc_hit = np.max(
             np.where(meets, np.minimum(cy + chord, top), -np.inf), axis=-1, initial=-np.inf
         )
-        t = (x[..., None] - self._edge_start[..., 0]) / self._edge_dx
-        on_edge = ~self._edge_vertical & (t >= 0) & (t <= 1)
+        across = x[..., None] - self._edge_start[..., 0]
+        t = across / self._edge_dx
         ys = self._edge_start[..., 1] + t * self._edge_delta[..., 1]
-        high = np.max(np.where(on_edge, ys, -np.inf), axis=-1)
-        low = np.min(np.where(on_edge, ys, np.inf), axis=-1)
+        # A vertical edge meets the ray along its whole length, or not at all.
+        along = self._edge_vertical & (across == 0)
+        on_edge = (~self._edge_vertical & (t >= 0) & (t <= 1)) | along
+        high = np.max(np.where(on_edge, np.where(along, self._edge_high, ys), -np.inf), axis=-1)
+        low = np.min(np.where(on_edge, np.where(along, self._edge_low, ys), np.inf), axis=-1)
         rect_hit = np.max(
             np.where(low <= top, np.minimum(high, top), -np.inf), axis=-1, initial=-np.inf
         )
@@ -310,6 +314,11 @@ class Gait:
         self._turn = 0
 
     @property
+    def params(self) -> GaitParams:
+        """Stride, step height, step time and threshold."""
+        return self._params
+
+    @property
     def legs(self) -> tuple[str, ...]:
         """The legs, in order."""
         return self._legs
@@ -340,8 +349,8 @@ class Gait:
     ) -> dict[str, np.ndarray]:
         """Advance to ``time`` (s), ``dt`` s after the previous update (or the start), with the
         body at ``position`` (px) and ``angle`` (radians); returns every foot's target, world
-        px. A step that has run its ``step_time`` lands first, then a group that is due lifts.
-        """
+        px. A step that has run its ``step_time`` lands first, then a group that is due lifts
+        (the group that has just landed stands until the next update at least)."""
         if not (math.isfinite(dt) and dt > 0):
             raise ValueError(f"dt must be a positive number of seconds, got {dt!r}")
         position = _point("position", position)
@@ -351,11 +360,12 @@ class Gait:
         self._spin = math.remainder(turn, math.tau) / dt
         self._position, self._angle = position, angle
         step = self._step
+        landed = None
         if step is not None and time - step.start >= self._params.step_time:
             self._planted[self._members[step.group]] = step.land
-            self._step = None
+            self._step, landed = None, step.group
         if self._step is None:
-            self._lift_if_due(time)
+            self._lift_if_due(time, landed)
         targets = self._planted.copy()
         self._progress = 0.0
         if self._step is not None:
@@ -374,7 +384,9 @@ class Gait:
             heights[heights < spots[:, 1] - self._reach] = np.nan
         return np.stack([xs, np.where(np.isnan(heights), spots[:, 1], heights)], axis=1)
 
-    def _lift_if_due(self, time: float) -> None:
+    def _lift_if_due(self, time: float, landed: int | None) -> None:
+        """Lift the first group due from the turn on; not one that has only now landed, which
+        stands for a tick at least."""
         params = self._params
         spots = self._rest_world(self._position, self._angle)
         arm = spots - self._position
@@ -388,7 +400,7 @@ class Gait:
         )
         for k in range(len(self._groups)):
             group = (self._turn + k) % len(self._groups)
-            if due[self._members[group]].any():
+            if group != landed and due[self._members[group]].any():
                 self._turn = (group + 1) % len(self._groups)
                 self._step = self._plan(group, time, direction)
                 return
