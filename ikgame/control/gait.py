@@ -45,7 +45,7 @@ def _number(name: str, value: object, *, positive: bool) -> float:
 
 def _point(name: str, value: ArrayLike) -> np.ndarray:
     point = np.asarray(value, dtype=float)
-    if point.shape != (2,) or not np.all(np.isfinite(point)):
+    if point.shape != (2,) or not (math.isfinite(point[0]) and math.isfinite(point[1])):
         raise ValueError(f"{name} must be a finite point (x, y) in px, got {value!r}")
     return point
 
@@ -186,10 +186,9 @@ def default_groups(legs: Sequence[str]) -> tuple[tuple[str, ...], ...]:
     if len(names) == 1:
         return (names,)
     # Leg i is on side i % 2 of pair i // 2; a group alternates both down the body and across.
-    groups = tuple(
+    return tuple(
         tuple(leg for i, leg in enumerate(names) if (i // 2 + i % 2) % 2 == g) for g in (0, 1)
     )
-    return groups
 
 
 @dataclass(frozen=True, eq=False)
