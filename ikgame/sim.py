@@ -331,6 +331,7 @@ class Simulation:
             velocities=self.world.joint_velocities(),
             gravity=self.world.gravity,
             dt=self.dt,
+            base_motion=self.world.base_motion(),
         )
         drive = command.drive
         self.world.drive(drive.rates, drive.torques, drive.forces, drive.budgets)
@@ -583,12 +584,23 @@ def _gait(level: Level, world: World, scene: Scene) -> Gait | None:
             threshold=config.stride / 2 if config.threshold is None else config.threshold,
         ),
         dict(zip(config.legs, rest, strict=True)),
-        Terrain(scene.segments, scene.circles),
+        # A foot's end is the centre of its round tip: it stands its radius above the ground.
+        Terrain(*_grown(scene.segments, scene.circles, float(world.link_widths[links].max()) / 2)),
         position=skeleton.base,
         angle=skeleton.base_angle,
         groups=config.groups,
         reach=max(float(spare.min()), 1.0),
     )
+
+
+def _grown(
+    segments: np.ndarray, circles: np.ndarray, by: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """Segment and circle obstacles ``by`` px thicker (the ground a round tip's centre meets)."""
+    grown_segments, grown_circles = segments.copy(), circles.copy()
+    grown_segments[:, 4] += by
+    grown_circles[:, 2] += by
+    return grown_segments, grown_circles
 
 
 def _scene(level: Level, world: World, script: ScriptRunner) -> Scene:
@@ -597,7 +609,7 @@ def _scene(level: Level, world: World, script: ScriptRunner) -> Scene:
     targets = []
     for _, step in script.steps:
         if isinstance(step, ReachStep):
-            targets.append(step.reach)
+            targets.extend(step.points)
         elif isinstance(step, FollowLine | FollowCircle | FollowLissajous | FollowPolyline):
             targets.append(follow_path(step)(0.0))
     props = tuple(

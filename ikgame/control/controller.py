@@ -133,35 +133,46 @@ class Controller:
         self.solver.solver_name = name
 
     def _goal_rates(
-        self, measured: np.ndarray, target: np.ndarray | TargetSet | None, dt: float
+        self,
+        measured: np.ndarray,
+        target: np.ndarray | TargetSet | None,
+        dt: float,
+        base_motion: tuple[np.ndarray, float] | None,
     ) -> np.ndarray | None:
         """Joint rates (rad/s) that carry the end effectors along with moving targets.
 
-        The least-norm rates for the targets' velocities (a damped pseudo-inverse of the
-        stacked Jacobian), so the chain moves with its targets and the servo only closes the
-        error on top, instead of lagging behind; rates beyond a joint's speed limit are scaled
-        down together, keeping the direction. Rates over ``JUMP`` times the limit mean a target
-        jumped (a new reach step): a new goal to brake toward, not a motion to follow.
+        The least-norm rates for the targets' velocities relative to the base (a damped
+        pseudo-inverse of the stacked Jacobian), so the chain moves with its targets, and holds
+        a still target while its base is carried, instead of lagging behind; the servo only
+        closes the error on top. Rates beyond a joint's speed limit are scaled down together,
+        keeping the direction. Rates over ``JUMP`` times the limit mean a target jumped (a new
+        reach step): a new goal to brake toward, not a motion to follow.
         """
         previous, self._last_target = self._last_target, target
         if target is None or previous is None:
             return None
+        if isinstance(target, TargetSet) != isinstance(previous, TargetSet):
+            return None
         if isinstance(target, TargetSet):
-            if not isinstance(previous, TargetSet) or not np.array_equal(
-                previous.links, target.links
-            ):
+            if not np.array_equal(previous.links, target.links):
                 return None
-            velocity = ((target.points - previous.points) / dt).reshape(-1)
-            if not np.any(velocity):
-                return None
-            arms = stacked_jacobian(self.skeleton, measured, target.links)
+            points, links = target.points, target.links
+            velocity = (target.points - previous.points) / dt
         else:
-            if isinstance(previous, TargetSet):
-                return None
-            velocity = (target - previous) / dt
-            if not np.any(velocity):
-                return None
+            points, links = target[None, :], None
+            velocity = ((target - previous) / dt)[None, :]
+        if base_motion is not None:
+            # The base carries each effector at its own velocity plus its spin about the base.
+            base_velocity, spin = base_motion
+            arms = points - self.skeleton.base
+            velocity = velocity - base_velocity - spin * np.column_stack((-arms[:, 1], arms[:, 0]))
+        if not np.any(velocity):
+            return None
+        if links is None:
             arms = jacobian(self.skeleton, measured)
+        else:
+            arms = stacked_jacobian(self.skeleton, measured, links)
+        velocity = velocity.reshape(-1)
         damping = (0.01 * self.skeleton.reach) ** 2
         rates = arms.T @ np.linalg.solve(
             arms @ arms.T + damping * np.eye(len(velocity)), velocity
@@ -197,13 +208,16 @@ class Controller:
         velocities: np.ndarray | None = None,
         gravity: tuple[float, float] | np.ndarray = (0.0, 0.0),
         dt: float | None = None,
+        base_motion: tuple[np.ndarray, float] | None = None,
     ) -> Command:
         """Motor commands toward ``target`` from the ``measured`` local angles (radians).
 
         ``target`` is the tip's target point (px) or, for a tree, a
-        :class:`~ikgame.kinematics.TargetSet` of effector links and points. With a servo, ``velocities`` (rad/s, child - parent), ``gravity`` (px/s^2) and the tick
-        ``dt`` (s) are needed too. With no target the chain holds the last pose it was asked
-        for (or its current one).
+        :class:`~ikgame.kinematics.TargetSet` of effector links and points. With a servo,
+        ``velocities`` (rad/s, child - parent), ``gravity`` (px/s^2) and the tick ``dt`` (s)
+        are needed too, and while the base moves ``base_motion``: its velocity (px/s) and spin
+        (rad/s). With no target the chain holds the last pose it was asked for (or its current
+        one).
         """
         if target is None or self._holding:
             if self._held is None:
@@ -230,7 +244,7 @@ class Controller:
         path = np.cumsum(measured) if skeleton.is_chain else skeleton.ancestors @ measured
         world_angles = path + skeleton.base_angle
         drive = self.servo.command(
-            error, world_angles, velocities, gravity, dt, self._goal_rates(measured, target, dt)
+            error, world_angles, velocities, gravity, dt, self._goal_rates(measured, target, dt, base_motion)
         )
         return Command(solution, drive.rates, drive)
 

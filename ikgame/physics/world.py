@@ -52,6 +52,16 @@ class _BaseMove:
     over: float
     elapsed: float = 0.0
 
+    def at(self, elapsed: float) -> tuple[np.ndarray, float, bool]:
+        """Where the base should be ``elapsed`` s into the move: position (px), angle
+        (radians), and whether the move is over then."""
+        # Ticks add up to the move's time only to within rounding: finish on the last one.
+        fraction = 1.0 if elapsed >= self.over - 1e-9 else elapsed / self.over
+        eased = fraction * fraction * (3.0 - 2.0 * fraction)
+        position = self.start + (self.end - self.start) * eased
+        angle = self.start_angle + (self.end_angle - self.start_angle) * eased
+        return position, angle, fraction >= 1.0
+
 
 def build_skeleton(level: Level) -> Skeleton:
     """The level's chain as a kinematic :class:`~ikgame.kinematics.Skeleton` (radians, px).
@@ -345,6 +355,17 @@ class World:
             end_angle = start_angle + math.remainder(angle - start_angle, math.tau)
         self._base_move = _BaseMove(start, end, start_angle, end_angle, float(over))
 
+    def base_motion(self) -> tuple[np.ndarray, float] | None:
+        """The base's velocity (px/s) and spin (rad/s) over the next step, or None while it
+        stands still."""
+        move = self._base_move
+        if move is None:
+            return None
+        # The step sets the velocity that lands the base on its profile at the step's end.
+        position, angle, _ = move.at(move.elapsed + self.last_dt)
+        velocity = (position - np.array(self.base_body.position)) / self.last_dt
+        return velocity, (angle - float(self.base_body.angle)) / self.last_dt
+
     def prop_states(self) -> np.ndarray:
         """(p, 3) each prop's ``(x, y, angle)``: centre in px, angle in radians.
 
@@ -367,17 +388,13 @@ class World:
             self.space.step(dt)
             return
         move.elapsed += dt
-        # Ticks add up to the move's time only to within rounding: finish on the last one.
-        fraction = 1.0 if move.elapsed >= move.over - 1e-9 else move.elapsed / move.over
-        eased = fraction * fraction * (3.0 - 2.0 * fraction)
-        wanted = move.start + (move.end - move.start) * eased
+        wanted, wanted_angle, done = move.at(move.elapsed)
         self.base_body.velocity = tuple((wanted - np.array(self.base_body.position)) / dt)
         turning = move.end_angle != move.start_angle
         if turning:
-            wanted_angle = move.start_angle + (move.end_angle - move.start_angle) * eased
             self.base_body.angular_velocity = (wanted_angle - self.base_body.angle) / dt
         self.space.step(dt)
-        if fraction >= 1.0:
+        if done:
             self.base_body.velocity = (0.0, 0.0)
             self.base_body.position = tuple(move.end)
             self.base_body.angular_velocity = 0.0
