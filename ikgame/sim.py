@@ -593,9 +593,7 @@ def _gait(level: Level, world: World, scene: Scene) -> Gait | None:
     )
 
 
-def _grown(
-    segments: np.ndarray, circles: np.ndarray, by: float
-) -> tuple[np.ndarray, np.ndarray]:
+def _grown(segments: np.ndarray, circles: np.ndarray, by: float) -> tuple[np.ndarray, np.ndarray]:
     """Segment and circle obstacles ``by`` px thicker (the ground a round tip's centre meets)."""
     grown_segments, grown_circles = segments.copy(), circles.copy()
     grown_segments[:, 4] += by

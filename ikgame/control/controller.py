@@ -174,9 +174,7 @@ class Controller:
             arms = stacked_jacobian(self.skeleton, measured, links)
         velocity = velocity.reshape(-1)
         damping = (0.01 * self.skeleton.reach) ** 2
-        rates = arms.T @ np.linalg.solve(
-            arms @ arms.T + damping * np.eye(len(velocity)), velocity
-        )
+        rates = arms.T @ np.linalg.solve(arms @ arms.T + damping * np.eye(len(velocity)), velocity)
         over = float(np.max(np.abs(rates) / self.max_speed))
         if over > JUMP:
             return None
@@ -244,7 +242,12 @@ class Controller:
         path = np.cumsum(measured) if skeleton.is_chain else skeleton.ancestors @ measured
         world_angles = path + skeleton.base_angle
         drive = self.servo.command(
-            error, world_angles, velocities, gravity, dt, self._goal_rates(measured, target, dt, base_motion)
+            error,
+            world_angles,
+            velocities,
+            gravity,
+            dt,
+            self._goal_rates(measured, target, dt, base_motion),
         )
         return Command(solution, drive.rates, drive)
 

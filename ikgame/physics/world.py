@@ -228,7 +228,9 @@ class World:
         """World positions of the joints, px: for a chain (n + 1, 2), joint 0 .. joint n-1 then
         the end effector; for a tree (2n, 2), the n link starts then the n link ends (the layout
         of :func:`~ikgame.kinematics.forward_kinematics`)."""
-        starts = [b.local_to_world((-h, 0.0)) for b, h in zip(self.bodies, self._halves, strict=True)]
+        starts = [
+            b.local_to_world((-h, 0.0)) for b, h in zip(self.bodies, self._halves, strict=True)
+        ]
         if self.skeleton.is_chain:
             return np.array([*starts, self.end_effector()], dtype=float)
         ends = [b.local_to_world((h, 0.0)) for b, h in zip(self.bodies, self._halves, strict=True)]
