@@ -22,8 +22,8 @@ import numpy as np
 from ikgame.control.blockage import BlockWatch
 from ikgame.control.controller import Controller
 from ikgame.control.dynamics import ChainInertia
-from ikgame.control.servo import Servo
 from ikgame.control.gait import Gait, GaitParams, Terrain
+from ikgame.control.servo import Servo
 from ikgame.kinematics import SolveStatus, TargetSet
 from ikgame.level.model import (
     CHAIN_EFFECTOR,
@@ -294,7 +294,9 @@ class Simulation:
         finished = len(self.script.outcomes)
         if self._multi:
             reached = self.world.effector_positions()
-            self.script.observe(self.time, self.dt, dict(zip(self.effector_names, reached)))
+            self.script.observe(
+                self.time, self.dt, dict(zip(self.effector_names, reached, strict=True))
+            )
         else:
             self.script.observe(self.time, self.dt, self.world.end_effector())
         self._note_blocked(finished)
