@@ -365,6 +365,8 @@ def test_bad_input_is_refused_with_a_message():
         Gait(PARAMS, QUAD, terrain, position=(0.0, 80.0), groups=[["fl", "fr", "hl", "hr"], []])
     with pytest.raises(ValueError, match="feet must give a point for each leg"):
         Gait(PARAMS, QUAD, terrain, position=(0.0, 80.0), feet={"fl": (0.0, 0.0)})
+    with pytest.raises(ValueError, match="at least one leg"):
+        Gait(PARAMS, {}, terrain, position=(0.0, 80.0), groups=[])
     with pytest.raises(ValueError, match="rest spot of 'a'"):
         Gait(PARAMS, {"a": (0.0,)}, terrain, position=(0.0, 80.0))
     gait = Gait(PARAMS, QUAD, terrain, position=(0.0, 80.0))
