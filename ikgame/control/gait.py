@@ -283,7 +283,9 @@ class Gait:
         reach: float | None = None,
     ) -> None:
         legs = tuple(rest)
-        chosen = default_groups(legs) if groups is None else tuple(tuple(g) for g in groups)
+        chosen = default_groups(legs)  # checks there are legs, too
+        if groups is not None:
+            chosen = tuple(tuple(group) for group in groups)
         grouped = [leg for group in chosen for leg in group]
         if any(not group for group in chosen) or sorted(grouped) != sorted(legs):
             raise ValueError(

@@ -239,6 +239,32 @@ def test_without_ground_or_beyond_reach_feet_keep_the_rest_height():
         assert len(past) and np.all(past[:, 1] == below)
 
 
+def _depth(points, capsules):
+    """How deep each point lies inside the deepest capsule ``(ax, ay, bx, by, radius)``, px
+    (negative: outside them all)."""
+    a, d = capsules[:, 0:2], capsules[:, 2:4] - capsules[:, 0:2]
+    squared = np.where((d * d).sum(1) > 0, (d * d).sum(1), 1.0)
+    t = np.clip(((points[:, None] - a) * d).sum(-1) / squared, 0.0, 1.0)
+    gap = np.hypot(*np.moveaxis(points[:, None] - a - t[..., None] * d, -1, 0))
+    return (capsules[:, 4] - gap).max(axis=1)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_on_random_cluttered_ground_a_stepping_foot_stays_out_of_every_obstacle(seed):
+    rng = np.random.default_rng(seed)
+    start, angle = rng.uniform([0, -10], [1000, 60], (15, 2)), rng.uniform(-3.0, 3.0, 15)
+    end = start + rng.uniform(0, 120, 15)[:, None] * np.column_stack([np.cos(angle), np.sin(angle)])
+    planks = np.column_stack([start, end, rng.uniform(0, 15, 15)])
+    circles = np.column_stack([rng.uniform([0, -60], [1000, 20], (5, 2)), rng.uniform(5, 60, 5)])
+    terrain = Terrain(np.vstack([FLOOR, planks]), circles)
+    speed = rng.uniform(40.0, 200.0)
+    record = Record(_quad(terrain, (0.0, 150.0)), _line(0.0, 1000.0, y=150.0, speed=speed))
+    capsules = np.vstack([FLOOR, planks, np.column_stack([circles[:, :2], circles])])
+    # The arc is checked against the terrain at 64 points, so between them it may graze.
+    assert _depth(record.targets[~record.planted], capsules).max() < 0.1
+    assert set(record.lifts()[:, 1]) == {0, 1, 2, 3}
+
+
 def test_ray_casts_against_hand_computed_hits():
     flat = Terrain(segments=[[0.0, 0.0, 100.0, 0.0, 10.0]])
     assert flat.ground_below(50.0, 100.0) == 10.0
@@ -339,6 +365,8 @@ def test_bad_input_is_refused_with_a_message():
         Gait(PARAMS, QUAD, terrain, position=(0.0, 80.0), groups=[["fl", "fr", "hl", "hr"], []])
     with pytest.raises(ValueError, match="feet must give a point for each leg"):
         Gait(PARAMS, QUAD, terrain, position=(0.0, 80.0), feet={"fl": (0.0, 0.0)})
+    with pytest.raises(ValueError, match="at least one leg"):
+        Gait(PARAMS, {}, terrain, position=(0.0, 80.0), groups=[])
     with pytest.raises(ValueError, match="rest spot of 'a'"):
         Gait(PARAMS, {"a": (0.0,)}, terrain, position=(0.0, 80.0))
     gait = Gait(PARAMS, QUAD, terrain, position=(0.0, 80.0))
