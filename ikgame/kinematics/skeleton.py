@@ -60,6 +60,18 @@ def check_angles(angles: object, count: int) -> np.ndarray:
     return arr
 
 
+def _limit_bounds(
+    limits: Sequence[tuple[float, float] | None] | None, n: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """(lower, upper) radians from one ``(lower, upper)`` or None (free) per link."""
+    limits = [None] * n if limits is None else list(limits)
+    if len(limits) != n:
+        raise ValueError(f"limits must have one entry per link ({n}), got {len(limits)}")
+    lower = [-np.inf if lim is None else lim[0] for lim in limits]
+    upper = [np.inf if lim is None else lim[1] for lim in limits]
+    return np.asarray(lower, dtype=float), np.asarray(upper, dtype=float)
+
+
 def _check_root_offsets(offsets: object, parents: np.ndarray) -> np.ndarray:
     """``root_offsets`` as a new (n, 2) float array (zeros for None), or ``ValueError``."""
     n = parents.shape[0]
@@ -153,16 +165,12 @@ class Skeleton:
         [inf, 1.0]
         """
         n = len(lengths)
-        limits = [None] * n if limits is None else list(limits)
-        if len(limits) != n:
-            raise ValueError(f"limits must have one entry per link ({n}), got {len(limits)}")
-        lower = [-np.inf if lim is None else lim[0] for lim in limits]
-        upper = [np.inf if lim is None else lim[1] for lim in limits]
+        lower, upper = _limit_bounds(limits, n)
         return cls(
             lengths=np.asarray(lengths, dtype=float),
             parents=np.arange(n) - 1,
-            lower=np.asarray(lower, dtype=float),
-            upper=np.asarray(upper, dtype=float),
+            lower=lower,
+            upper=upper,
             base=np.asarray(base, dtype=float),
             base_angle=base_angle,
         )
@@ -187,16 +195,12 @@ class Skeleton:
         ([1, 3], ((1,), (), (3,), ()))
         """
         n = len(lengths)
-        limits = [None] * n if limits is None else list(limits)
-        if len(limits) != n:
-            raise ValueError(f"limits must have one entry per link ({n}), got {len(limits)}")
-        lower = [-np.inf if lim is None else lim[0] for lim in limits]
-        upper = [np.inf if lim is None else lim[1] for lim in limits]
+        lower, upper = _limit_bounds(limits, n)
         return cls(
             lengths=np.asarray(lengths, dtype=float),
             parents=np.asarray(parents),
-            lower=np.asarray(lower, dtype=float),
-            upper=np.asarray(upper, dtype=float),
+            lower=lower,
+            upper=upper,
             base=np.asarray(base, dtype=float),
             base_angle=base_angle,
             root_offsets=root_offsets,  # type: ignore[arg-type]  # checked and converted there
