@@ -217,7 +217,7 @@ class Skeleton:
         return bool(np.array_equal(self.parents, np.arange(self.count) - 1))
 
     @cached_property
-    def offset(self) -> bool:
+    def has_root_offsets(self) -> bool:
         """True when some root joint sits off the base (a nonzero row of ``root_offsets``)."""
         return bool(np.any(self.root_offsets))
 
@@ -281,7 +281,7 @@ class Skeleton:
         ...               root_offsets=[(0, 0), (2, 0)]).root_points().round(6).tolist()
         [[5.0, 0.0], [5.0, 2.0]]
         """
-        if not self.offset:
+        if not self.has_root_offsets:
             return np.broadcast_to(self.base, (self.count, 2))
         c, s = np.cos(self.base_angle), np.sin(self.base_angle)
         offsets = self.root_offsets[self.roots]
@@ -299,7 +299,7 @@ class Skeleton:
         depth = np.zeros(self.count)
         for i, p in enumerate(self.parents):
             depth[i] = self.lengths[i] + (depth[p] if p >= 0 else 0.0)
-        if self.offset:
+        if self.has_root_offsets:
             depth += np.hypot(*self.root_offsets[self.roots].T)
         return float(depth.max())
 
@@ -342,7 +342,7 @@ def forward_kinematics(skeleton: Skeleton, angles: np.ndarray) -> tuple[np.ndarr
     if skeleton.is_chain:
         world = skeleton.base_angle + np.cumsum(angles)
         steps = skeleton.lengths[:, None] * np.column_stack((np.cos(world), np.sin(world)))
-        origin = skeleton.root_points()[0] if skeleton.offset else skeleton.base
+        origin = skeleton.root_points()[0] if skeleton.has_root_offsets else skeleton.base
         points = np.vstack((origin, origin + np.cumsum(steps, axis=0)))
         return points, world
     starts, ends, world = tree_points(skeleton, angles, skeleton.root_points())
