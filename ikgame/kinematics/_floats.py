@@ -15,7 +15,7 @@ def check_chain(skeleton: Skeleton) -> None:
     """``ValueError`` unless ``skeleton`` is a serial chain with its joint 0 on the base."""
     if not skeleton.is_chain:
         raise ValueError("this solver needs a serial chain (parents[i] == i - 1)")
-    if skeleton.offset:
+    if skeleton.has_root_offsets:
         raise ValueError(
             "this solver needs joint 0 on the base (zero root_offsets); "
             "the multi-target solvers take root offsets"

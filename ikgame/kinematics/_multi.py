@@ -170,7 +170,7 @@ def as_chain_solve(
         isinstance(targets, TargetSet)
         and len(targets) == 1
         and skeleton.is_chain
-        and not skeleton.offset
+        and not skeleton.has_root_offsets
         and int(targets.links[0]) == skeleton.count - 1
     ):
         return None

@@ -192,20 +192,14 @@ def solve_dls(
         ry = arms[:, 1]
         step = _damped_step(rx, ry, ex, ey, damping)
         if has_limits:
-            free = ~(
-                ((current <= skeleton.lower) & (step < 0.0))
-                | ((current >= skeleton.upper) & (step > 0.0))
-            )
+            free = ~_pressing(skeleton, current, step)
             if not free.all():
                 step = _damped_step(rx * free, ry * free, ex, ey, damping)
-        largest = float(np.abs(step).max())
-        if largest > MAX_STEP:
-            step *= MAX_STEP / largest
-        return step
+        return _capped(step)
 
     def adapt(improved: bool) -> None:
         nonlocal mu
-        mu = max(mu * MU_DOWN, MU_MIN) if improved else min(mu * MU_UP, MU_MAX)
+        mu = _next_mu(mu, improved=improved)
 
     return _descend(skeleton, angles, target, max_iterations, tolerance, propose, adapt)
 
@@ -275,6 +269,24 @@ def _enough(
 def _next_gain(gain: float, *, improved: bool) -> float:
     """The Jacobian-transpose gain after a step: grown (to ``GAIN_MAX``) or shrunk."""
     return min(gain * GAIN_GROW, GAIN_MAX) if improved else gain * GAIN_SHRINK
+
+
+def _next_mu(mu: float, *, improved: bool) -> float:
+    """The damped-least-squares factor after a step: lowered (to ``MU_MIN``) or raised."""
+    return max(mu * MU_DOWN, MU_MIN) if improved else min(mu * MU_UP, MU_MAX)
+
+
+def _pressing(skeleton: Skeleton, angles: np.ndarray, step: np.ndarray) -> np.ndarray:
+    """(n,) bool: the joints on a limit that ``step`` (radians) pushes further into it."""
+    return ((angles <= skeleton.lower) & (step < 0.0)) | ((angles >= skeleton.upper) & (step > 0.0))
+
+
+def _capped(step: np.ndarray) -> np.ndarray:
+    """``step`` scaled down, if need be, to change no joint by more than ``MAX_STEP``."""
+    largest = float(np.abs(step).max())
+    if largest > MAX_STEP:
+        step *= MAX_STEP / largest
+    return step
 
 
 def _damped_step(

@@ -23,14 +23,12 @@ from ikgame.kinematics._multi import STALL_GAIN, Problem, as_chain_solve, prepar
 from ikgame.kinematics.ccd import TRIVIAL_ARC_LENGTH
 from ikgame.kinematics.jacobian import (
     DAMPING_BIAS,
-    MAX_STEP,
-    MU_DOWN,
     MU_INITIAL,
-    MU_MAX,
-    MU_MIN,
-    MU_UP,
     SUFFICIENT_DECREASE,
+    _capped,
     _next_gain,
+    _next_mu,
+    _pressing,
     solve_dls,
     solve_jacobian_transpose,
 )
@@ -68,7 +66,6 @@ def solve_jacobian_transpose_targets(
     if chain is not None:
         return chain
     problem, start = prepare(skeleton, angles, targets, max_iterations, tolerance)
-    lower, upper = skeleton.lower, skeleton.upper
     gain = 1.0
 
     def propose(current: np.ndarray, stacked: np.ndarray, error: np.ndarray) -> np.ndarray:
@@ -76,9 +73,7 @@ def solve_jacobian_transpose_targets(
         if problem.has_limits:
             # Projected gradient: a joint pushing into its limit would only shorten the line
             # search for the others.
-            gradient[
-                ((current <= lower) & (gradient < 0.0)) | ((current >= upper) & (gradient > 0.0))
-            ] = 0.0
+            gradient[_pressing(skeleton, current, gradient)] = 0.0
         velocity = stacked @ gradient
         speed_sq = float(velocity @ velocity)
         if speed_sq == 0.0:
@@ -117,24 +112,20 @@ def solve_dls_targets(
         return chain
     problem, start = prepare(skeleton, angles, targets, max_iterations, tolerance)
     bias = DAMPING_BIAS * skeleton.reach**2 * problem.total_weight
-    lower, upper = skeleton.lower, skeleton.upper
     mu = MU_INITIAL
 
     def propose(current: np.ndarray, stacked: np.ndarray, error: np.ndarray) -> np.ndarray:
         damping = mu * (0.5 * float(error @ error) + bias)
         step = _damped_step(stacked, error, damping)
         if problem.has_limits:
-            free = ~(((current <= lower) & (step < 0.0)) | ((current >= upper) & (step > 0.0)))
+            free = ~_pressing(skeleton, current, step)
             if not free.all():
                 step = _damped_step(stacked * free, error, damping)
-        largest = float(np.abs(step).max())
-        if largest > MAX_STEP:
-            step *= MAX_STEP / largest
-        return step
+        return _capped(step)
 
     def adapt(improved: bool) -> None:
         nonlocal mu
-        mu = max(mu * MU_DOWN, MU_MIN) if improved else min(mu * MU_UP, MU_MAX)
+        mu = _next_mu(mu, improved=improved)
 
     return descend(problem, start, max_iterations, propose, adapt)
 

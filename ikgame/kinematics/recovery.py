@@ -758,7 +758,7 @@ def _error(skeleton: Skeleton, angles: np.ndarray, target: np.ndarray) -> float:
 def _float_chain(skeleton: Skeleton) -> FloatChain | None:
     """The chain as floats for :meth:`RobustSolver.solve`, or None for a tree or a chain whose
     joint 0 sits off the base (only :meth:`RobustSolver.solve_targets` takes those)."""
-    return FloatChain(skeleton) if skeleton.is_chain and not skeleton.offset else None
+    return FloatChain(skeleton) if skeleton.is_chain and not skeleton.has_root_offsets else None
 
 
 def _goal_key(targets: TargetSet) -> _Goal:

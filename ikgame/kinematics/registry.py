@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from types import MappingProxyType
-from typing import Final
+from typing import Final, TypeVar
 
 from ikgame.kinematics.ccd import solve_ccd
 from ikgame.kinematics.fabrik import solve_fabrik
@@ -19,6 +19,8 @@ from ikgame.kinematics.multi_jacobian import solve_dls_targets, solve_jacobian_t
 from ikgame.kinematics.solver import Solver, TargetSolver
 
 __all__ = ["SOLVERS", "TARGET_SOLVERS", "get_solver", "get_target_solver"]
+
+_S = TypeVar("_S", Solver, TargetSolver)
 
 SOLVERS: Final[Mapping[str, Solver]] = MappingProxyType(
     {
@@ -48,11 +50,7 @@ def get_solver(name: str) -> Solver:
     >>> get_solver("dls") is solve_dls
     True
     """
-    try:
-        return SOLVERS[name]
-    except (KeyError, TypeError):
-        choices = ", ".join(sorted(SOLVERS))
-        raise ValueError(f"unknown solver {name!r}; choose one of: {choices}") from None
+    return _lookup(SOLVERS, name)
 
 
 def get_target_solver(name: str) -> TargetSolver:
@@ -61,8 +59,12 @@ def get_target_solver(name: str) -> TargetSolver:
     >>> get_target_solver("fabrik") is solve_fabrik_targets
     True
     """
+    return _lookup(TARGET_SOLVERS, name)
+
+
+def _lookup(table: Mapping[str, _S], name: str) -> _S:
     try:
-        return TARGET_SOLVERS[name]
+        return table[name]
     except (KeyError, TypeError):
-        choices = ", ".join(sorted(TARGET_SOLVERS))
+        choices = ", ".join(sorted(table))
         raise ValueError(f"unknown solver {name!r}; choose one of: {choices}") from None

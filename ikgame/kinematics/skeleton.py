@@ -61,6 +61,18 @@ def check_angles(angles: object, count: int) -> np.ndarray:
     return arr
 
 
+def _limit_bounds(
+    limits: Sequence[tuple[float, float] | None] | None, n: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """(lower, upper) radians from one ``(lower, upper)`` or None (free) per link."""
+    limits = [None] * n if limits is None else list(limits)
+    if len(limits) != n:
+        raise ValueError(f"limits must have one entry per link ({n}), got {len(limits)}")
+    lower = [-np.inf if lim is None else lim[0] for lim in limits]
+    upper = [np.inf if lim is None else lim[1] for lim in limits]
+    return np.asarray(lower, dtype=float), np.asarray(upper, dtype=float)
+
+
 def _check_root_offsets(offsets: object, parents: np.ndarray) -> np.ndarray:
     """``root_offsets`` as a new (n, 2) float array (zeros for None), or ``ValueError``."""
     n = parents.shape[0]
@@ -154,16 +166,12 @@ class Skeleton:
         [inf, 1.0]
         """
         n = len(lengths)
-        limits = [None] * n if limits is None else list(limits)
-        if len(limits) != n:
-            raise ValueError(f"limits must have one entry per link ({n}), got {len(limits)}")
-        lower = [-np.inf if lim is None else lim[0] for lim in limits]
-        upper = [np.inf if lim is None else lim[1] for lim in limits]
+        lower, upper = _limit_bounds(limits, n)
         return cls(
             lengths=np.asarray(lengths, dtype=float),
             parents=np.arange(n) - 1,
-            lower=np.asarray(lower, dtype=float),
-            upper=np.asarray(upper, dtype=float),
+            lower=lower,
+            upper=upper,
             base=np.asarray(base, dtype=float),
             base_angle=base_angle,
         )
@@ -188,16 +196,12 @@ class Skeleton:
         ([1, 3], ((1,), (), (3,), ()))
         """
         n = len(lengths)
-        limits = [None] * n if limits is None else list(limits)
-        if len(limits) != n:
-            raise ValueError(f"limits must have one entry per link ({n}), got {len(limits)}")
-        lower = [-np.inf if lim is None else lim[0] for lim in limits]
-        upper = [np.inf if lim is None else lim[1] for lim in limits]
+        lower, upper = _limit_bounds(limits, n)
         return cls(
             lengths=np.asarray(lengths, dtype=float),
             parents=np.asarray(parents),
-            lower=np.asarray(lower, dtype=float),
-            upper=np.asarray(upper, dtype=float),
+            lower=lower,
+            upper=upper,
             base=np.asarray(base, dtype=float),
             base_angle=base_angle,
             root_offsets=root_offsets,  # type: ignore[arg-type]  # checked and converted there
@@ -214,7 +218,7 @@ class Skeleton:
         return bool(np.array_equal(self.parents, np.arange(self.count) - 1))
 
     @cached_property
-    def offset(self) -> bool:
+    def has_root_offsets(self) -> bool:
         """True when some root joint sits off the base (a nonzero row of ``root_offsets``)."""
         return bool(np.any(self.root_offsets))
 
@@ -278,7 +282,7 @@ class Skeleton:
         ...               root_offsets=[(0, 0), (2, 0)]).root_points().round(6).tolist()
         [[5.0, 0.0], [5.0, 2.0]]
         """
-        if not self.offset:
+        if not self.has_root_offsets:
             return np.broadcast_to(self.base, (self.count, 2))
         c, s = np.cos(self.base_angle), np.sin(self.base_angle)
         offsets = self.root_offsets[self.roots]
@@ -296,7 +300,7 @@ class Skeleton:
         depth = np.zeros(self.count)
         for i, p in enumerate(self.parents):
             depth[i] = self.lengths[i] + (depth[p] if p >= 0 else 0.0)
-        if self.offset:
+        if self.has_root_offsets:
             depth += np.hypot(*self.root_offsets[self.roots].T)
         return float(depth.max())
 
@@ -344,7 +348,7 @@ def forward_kinematics(skeleton: Skeleton, angles: np.ndarray) -> tuple[np.ndarr
     if skeleton.is_chain:
         world = skeleton.base_angle + np.cumsum(angles)
         steps = skeleton.lengths[:, None] * np.column_stack((np.cos(world), np.sin(world)))
-        origin = skeleton.root_points()[0] if skeleton.offset else skeleton.base
+        origin = skeleton.root_points()[0] if skeleton.has_root_offsets else skeleton.base
         points = np.vstack((origin, origin + np.cumsum(steps, axis=0)))
         return points, world
     starts, ends, world = tree_points(skeleton, angles, skeleton.root_points())

@@ -103,10 +103,12 @@ def stacked_jacobian(
     [[20.0, 10.0, 0.0], [20.0, 0.0, 10.0]]
     """
     angles = check_angles(angles, skeleton.count)
-    chosen = TargetSet(np.asarray(links), np.zeros((len(links), 2))).links
-    TargetSet(chosen, np.zeros((len(chosen), 2))).check(skeleton)
+    # The links are checked as a target set's are; the points play no part.
+    chosen = TargetSet(links, np.zeros((len(links), 2)))
+    chosen.check(skeleton)
     starts, ends, _ = tree_points(skeleton, angles, skeleton.root_points())
-    return columns(ends[chosen], starts, skeleton.ancestors[chosen]).reshape(-1, skeleton.count)
+    mask = skeleton.ancestors[chosen.links]
+    return columns(ends[chosen.links], starts, mask).reshape(-1, skeleton.count)
 
 
 def columns(effectors: np.ndarray, starts: np.ndarray, mask: np.ndarray) -> np.ndarray:

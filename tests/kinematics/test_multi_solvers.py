@@ -318,3 +318,14 @@ def test_conflicting_targets_settle_at_the_weighted_least_squares_optimum(name, 
         value = float(_objective(skeleton, sol.angles[None], targets)[0])
         assert value == pytest.approx(best_value, rel=1e-6)
         np.testing.assert_allclose(np.angle(np.exp(1j * (sol.angles - best))), 0.0, atol=2e-4)
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_a_target_on_a_middle_link_leaves_the_links_beyond_it_alone(name):
+    chain = Skeleton.chain([40.0, 30.0, 20.0, 10.0], limits=[None, (-2.0, 2.0), None, None])
+    start = np.array([0.2, 0.5, -0.7, 1.1])
+    targets = TargetSet([1], _ends(chain, np.array([1.0, -0.8, 0.0, 0.0]))[[1]])
+    sol = TARGET_SOLVERS[name](chain, start, targets, max_iterations=200, tolerance=0.1)
+    _assert_sound(chain, sol, targets, start)
+    assert sol.status is SolveStatus.SUCCESS
+    np.testing.assert_array_equal(sol.angles[2:], start[2:])

@@ -308,7 +308,7 @@ def test_tree_structure():
         [0, 0, 1, 1, 0],
         [0, 0, 1, 0, 1],
     ]
-    assert not HIPS.is_chain and HIPS.offset
+    assert not HIPS.is_chain and HIPS.has_root_offsets
     for name in ("effectors", "ancestors", "roots", "root_offsets"):
         assert not getattr(HIPS, name).flags.writeable
 
@@ -317,7 +317,7 @@ def test_a_chain_has_one_effector_and_zero_root_offsets():
     chain = Skeleton.chain([1.0, 2.0, 3.0])
     assert chain.effectors.tolist() == [2]
     assert chain.root_offsets.tolist() == [[0.0, 0.0]] * 3
-    assert not chain.offset
+    assert not chain.has_root_offsets
 
 
 def test_tree_limits_are_in_link_order():
