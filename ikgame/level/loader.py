@@ -484,6 +484,8 @@ def _message(err: dict) -> str:
         loc = err["loc"]
         if len(loc) == 5 and loc[2] == "follow" and loc[3] in FOLLOW_SHAPES:
             return _follow_key_message(loc[3], str(loc[4]))
+        if loc[2:] == ("reach", "effector"):
+            return "a reach step names its effectors in a table: reach = { name = [x, y] }"
         return "unknown key (check the spelling; see docs/levels.md)"
     if kind == "missing" and isinstance(err["loc"][-1], int):
         return "too few values"

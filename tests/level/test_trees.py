@@ -262,3 +262,11 @@ def test_the_level_model_doctest_chain_is_still_a_chain():
     )
     assert level.chain.bones is None and level.chain.entry_field == "links"
     assert level.script_effectors == ("tip",)
+
+
+def test_a_reach_step_with_an_effector_key_is_shown_the_table():
+    text = HEAD + "[[chain.links]]\nlength = 40.0\n[[script]]\nreach = [0.0, 40.0]\n"
+    assert _problems(text + 'effector = "tip"\n') == [
+        "t.toml:9: script[0].effector: a reach step names its effectors in a table: "
+        "reach = { name = [x, y] }"
+    ]
