@@ -22,7 +22,7 @@ import numpy as np
 from ikgame.control.blockage import BlockWatch
 from ikgame.control.controller import Controller
 from ikgame.control.dynamics import ChainInertia
-from ikgame.control.gait import Gait, GaitParams, Terrain
+from ikgame.control.gait import Footing, Gait, GaitParams, Terrain
 from ikgame.control.servo import Servo
 from ikgame.kinematics import SolveStatus, TargetSet
 from ikgame.level.model import (
@@ -94,6 +94,8 @@ class RunResult:
         score: 0..100, see :mod:`ikgame.level.scoring`.
         expect: the status the level is designed to end with.
         divergence: for a ``diverged`` run, the body that blew up and the tick, else empty.
+        footing: for a creature with a gait, per leg the steps it took and how far its foot
+            slid while planted and sank into the ground (px); else empty.
     """
 
     level: str
@@ -107,25 +109,30 @@ class RunResult:
     score: float = 0.0
     expect: str = "passed"
     divergence: str = ""
+    footing: dict[str, dict[str, float | int]] = field(default_factory=dict)
 
     def as_dict(self) -> dict[str, object]:
         """Plain data in a fixed key order."""
-        return {
-            "level": self.level,
-            "solver": self.solver,
-            "status": self.status,
-            "expect": self.expect,
-            "score": self.score,
-            "steps_passed": sum(s.passed for s in self.steps),
-            "steps_total": len(self.steps),
-            "goals_passed": sum(g.passed for g in self.goals),
-            "goals_total": len(self.goals),
-            "ticks": self.ticks,
-            "sim_time": round(self.sim_time, 6),
-            "steps": [s.as_dict() for s in self.steps],
-            "goals": [g.as_dict() for g in self.goals],
-            "options": dict(self.options),
-        } | ({"divergence": self.divergence} if self.divergence else {})
+        return (
+            {
+                "level": self.level,
+                "solver": self.solver,
+                "status": self.status,
+                "expect": self.expect,
+                "score": self.score,
+                "steps_passed": sum(s.passed for s in self.steps),
+                "steps_total": len(self.steps),
+                "goals_passed": sum(g.passed for g in self.goals),
+                "goals_total": len(self.goals),
+                "ticks": self.ticks,
+                "sim_time": round(self.sim_time, 6),
+                "steps": [s.as_dict() for s in self.steps],
+                "goals": [g.as_dict() for g in self.goals],
+                "options": dict(self.options),
+            }
+            | ({"divergence": self.divergence} if self.divergence else {})
+            | ({"footing": self.footing} if self.footing else {})
+        )
 
 
 class Simulation:
@@ -204,7 +211,7 @@ class Simulation:
         self._watch = BlockWatch(dt=self.dt, arrival=level.chain.arrival)
         self._blocked_target: np.ndarray | TargetSet | None = None
         self._blocked_in_step = False
-        self.gait = _gait(level, self.world, self.scene)
+        self.gait, self._footing = _gait(level, self.world, self.scene)
         """The creature's :class:`~ikgame.control.gait.Gait` when the level has a ``[gait]``."""
         self._gait_targets: dict[str, np.ndarray] = {}
         if self._has_goals:
@@ -300,6 +307,10 @@ class Simulation:
         else:
             self.script.observe(self.time, self.dt, self.world.end_effector())
         self._note_blocked(finished)
+        if self.gait is not None:
+            self._footing.observe(
+                self.gait.feet, dict(zip(self.effector_names, reached, strict=True))
+            )
         if self._has_goals:
             self.goals.observe(self.time, self.world.prop_states())
         self._last = info
@@ -488,6 +499,7 @@ class Simulation:
             ),
             expect=self.level.level.expect,
             divergence=self._divergence,
+            footing={} if self._footing is None else self._footing.as_dict(),
         )
         if self.done:
             self._result = result
@@ -561,11 +573,11 @@ def run_level(level: Level, *, solver: str | None = None, record: bool = True) -
     return sim
 
 
-def _gait(level: Level, world: World, scene: Scene) -> Gait | None:
+def _gait(level: Level, world: World, scene: Scene) -> tuple[Gait | None, Footing | None]:
     """The level's gait, its feet resting where the start pose puts them (in the body's
-    frame), standing on the level's obstacles."""
+    frame), standing on the level's obstacles; and what measures how the feet hold."""
     if level.gait is None:
-        return None
+        return None, None
     config = level.gait
     names = level.chain.effector_names
     links = [level.chain.effector_links[names.index(leg)] for leg in config.legs]
@@ -578,7 +590,10 @@ def _gait(level: Level, world: World, scene: Scene) -> Gait | None:
     hips = skeleton.root_points()[links]
     lengths = skeleton.ancestors[links] @ skeleton.lengths
     spare = lengths - np.hypot(*(world.link_ends(np.array(links)) - hips).T)
-    return Gait(
+    # A foot's end is the centre of its round tip: it stands its radius above the ground.
+    radius = float(world.link_widths[links].max()) / 2
+    ground = Terrain(*_grown(scene.segments, scene.circles, radius))
+    gait = Gait(
         GaitParams(
             stride=config.stride,
             step_height=config.step_height,
@@ -586,13 +601,13 @@ def _gait(level: Level, world: World, scene: Scene) -> Gait | None:
             threshold=config.stride / 2 if config.threshold is None else config.threshold,
         ),
         dict(zip(config.legs, rest, strict=True)),
-        # A foot's end is the centre of its round tip: it stands its radius above the ground.
-        Terrain(*_grown(scene.segments, scene.circles, float(world.link_widths[links].max()) / 2)),
+        ground,
         position=skeleton.base,
         angle=skeleton.base_angle,
         groups=config.groups,
         reach=max(float(spare.min()), 1.0),
     )
+    return gait, Footing(config.legs, ground)
 
 
 def _grown(segments: np.ndarray, circles: np.ndarray, by: float) -> tuple[np.ndarray, np.ndarray]:

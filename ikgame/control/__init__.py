@@ -1,12 +1,13 @@
 """Per-tick joint control: IK solver -> desired angles -> motor rates."""
 
 from ikgame.control.controller import Command, Controller, joint_error
-from ikgame.control.gait import FootState, Gait, GaitParams, Terrain, default_groups
+from ikgame.control.gait import Footing, FootState, Gait, GaitParams, Terrain, default_groups
 
 __all__ = [
     "Command",
     "Controller",
     "FootState",
+    "Footing",
     "Gait",
     "GaitParams",
     "Terrain",

@@ -21,7 +21,7 @@ from typing import Final
 import numpy as np
 from numpy.typing import ArrayLike
 
-__all__ = ["FootState", "Gait", "GaitParams", "Terrain", "default_groups"]
+__all__ = ["FootState", "Footing", "Gait", "GaitParams", "Terrain", "default_groups"]
 
 PATH_SAMPLES: Final = 64
 """Points along a step's path checked against the terrain when the step is planned."""
@@ -439,3 +439,55 @@ class Gait:
         points = step.lift + (step.land - step.lift) * _ease(s)
         points[:, 1] += step.height * math.sin(math.pi * s)
         return points
+
+
+class Footing:
+    """How well the planted feet held, measured tick by tick: for each leg the steps it took,
+    the farthest its foot slid while planted (px) and the deepest it sank below the ground (px).
+
+    Slip is the distance of the foot from where it stood on the first tick of a planted spell
+    (so a foot still settling after it lands counts too); sinking is how far the foot's tip
+    centre went below the ``ground`` it stands on (the terrain grown by the foot's radius).
+
+    >>> ground = Terrain(segments=[[-100.0, 0.0, 100.0, 0.0, 0.0]])
+    >>> footing = Footing(("a",), ground)
+    >>> footing.observe({"a": FootState(True, np.zeros(2), 0.0)}, {"a": np.array([0.0, 0.5])})
+    >>> footing.observe({"a": FootState(True, np.zeros(2), 0.0)}, {"a": np.array([1.5, -0.5])})
+    >>> footing.as_dict()
+    {'a': {'steps': 1, 'slip': 1.802776, 'sink': 0.5}}
+    """
+
+    def __init__(self, legs: Sequence[str], ground: Terrain) -> None:
+        self._legs = tuple(legs)
+        self._ground = ground
+        self._since: dict[str, np.ndarray | None] = dict.fromkeys(self._legs)
+        self._steps = dict.fromkeys(self._legs, 0)
+        self._slip = dict.fromkeys(self._legs, 0.0)
+        self._sink = dict.fromkeys(self._legs, 0.0)
+
+    def observe(self, feet: Mapping[str, FootState], positions: Mapping[str, np.ndarray]) -> None:
+        """One tick: each foot's phase from the gait and where the foot really is (px)."""
+        for leg in self._legs:
+            where = np.asarray(positions[leg], dtype=float)
+            ground = self._ground.ground_below(float(where[0]), float(where[1]) + 1e4)
+            if ground is not None:
+                self._sink[leg] = max(self._sink[leg], ground - float(where[1]))
+            if not feet[leg].planted:
+                self._since[leg] = None
+                continue
+            since = self._since[leg]
+            if since is None:
+                self._since[leg], self._steps[leg] = where.copy(), self._steps[leg] + 1
+                continue
+            self._slip[leg] = max(self._slip[leg], float(np.hypot(*(where - since))))
+
+    def as_dict(self) -> dict[str, dict[str, float | int]]:
+        """Per leg: ``steps`` (planted spells begun), ``slip`` and ``sink`` (px, 6 decimals)."""
+        return {
+            leg: {
+                "steps": self._steps[leg],
+                "slip": round(self._slip[leg], 6),
+                "sink": round(max(self._sink[leg], 0.0), 6),
+            }
+            for leg in self._legs
+        }
