@@ -124,7 +124,10 @@ def _draw_dynamic(
     styles = painter.theme.effector_styles(len(scene.effectors))
     targets = snapshot.target_points
     if len(targets) != len(styles):
-        raise ValueError(f"snapshot has {len(targets)} target rows for {len(styles)} effectors")
+        raise ValueError(
+            f"snapshot has {len(targets)} target rows for {len(styles)} effectors (a tree's "
+            "Snapshot.targets has one per effector, NaN where there is none)"
+        )
     painter.upcoming_targets(scene, snapshot, styles)
     if trail is not None:
         paths = np.asarray(trail, dtype=float)

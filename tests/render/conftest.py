@@ -4,6 +4,7 @@ simulation is needed to exercise it."""
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -119,21 +120,9 @@ def make_tree_snapshots(scene: Scene, count: int) -> list[Snapshot]:
             targets[1] = np.nan
         tips = joints[len(TREE_PARENTS) :][TREE_EFFECTORS]
         errors = np.linalg.norm(tips - targets, axis=1)
-        snaps.append(
-            Snapshot(
-                time=k / scene.fps,
-                tick=8 * k,
-                joints=joints,
-                angles=angles,
-                world_angles=world,
-                step_index=0,
-                error=float(np.nanmax(errors)),
-                solver_status="processing",
-                torque_limited=np.zeros(len(TREE_PARENTS), dtype=bool),
-                targets=targets,
-                errors=errors,
-            )
-        )
+        largest = float(np.nanmax(errors))
+        snap = Snapshot(k / scene.fps, 8 * k, joints, angles, world, error=largest)
+        snaps.append(replace(snap, targets=targets, errors=errors))
     return snaps
 
 

@@ -346,3 +346,38 @@ def test_a_tree_snapshot_that_does_not_fit_its_scene_raises(tree_run):
         )
     with pytest.raises(ValueError, match="trail has shape"):
         render_snapshot(scene, snaps[0], TREE_CAMERA, LIGHT, trail=np.zeros((4, 3, 2)))
+
+
+def test_a_tree_links_sprite_lies_along_that_link(tree_run):
+    from ikgame.snapshot import Sprite
+
+    red = np.zeros((8, 40, 4), dtype=np.uint8)
+    red[...] = (255, 0, 0, 255)
+    sprites = (None, None, None, Sprite(red, (0.0, 4.0), 1.0), None)  # the right upper arm
+    scene, snaps = tree_run(2, link_sprites=sprites)
+    snap = snaps[-1]
+    image = render_snapshot(scene, snap, TREE_CAMERA, LIGHT, hud=False)
+    starts, ends = snap.joints[:5], snap.joints[5:]
+    assert _pixel(image, TREE_CAMERA, (starts[3] + ends[3]) / 2) == (255, 0, 0)
+    assert _pixel(image, TREE_CAMERA, (starts[1] + ends[1]) / 2) == LIGHT.link
+
+
+def test_roots_spread_over_a_body_stand_on_no_pedestal():
+    def image(starts):
+        scene = _bare_scene(
+            link_widths=np.full(2, 12.0),
+            parents=np.array([-1, -1]),
+            effector_links=np.array([0, 1]),
+            effector_names=("a", "b"),
+        )
+        joints = np.vstack([starts, starts + [0.0, 40.0]])
+        snap = Snapshot(0.0, 0, joints, np.zeros(2), np.zeros(2), targets=np.full((2, 2), np.nan))
+        return render_snapshot(scene, snap, Camera((200, 100), scale=1.0), LIGHT, hud=False)
+
+    camera = Camera((200, 100), scale=1.0)
+    shared = image(np.array([[0.0, 0.0], [0.0, 0.0]]))
+    assert _pixel(shared, camera, (0.0, -12.0)) == LIGHT.base  # the pedestal under the base
+    spread = image(np.array([[-40.0, 0.0], [40.0, 0.0]]))
+    for x in (-40.0, 40.0):
+        assert _pixel(spread, camera, (x, -12.0)) == LIGHT.background
+        assert _pixel(spread, camera, (x, 0.0)) == LIGHT.base  # each root's bolt
