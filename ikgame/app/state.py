@@ -37,7 +37,7 @@ from ikgame.render.pillow import render_snapshot
 from ikgame.render.theme import Theme, load_theme
 from ikgame.sim import RunResult, Simulation
 from ikgame.skins import level_sprites
-from ikgame.snapshot import Sprite
+from ikgame.snapshot import Sprite, effector_positions
 
 __all__ = [
     "BINDINGS",
@@ -192,8 +192,8 @@ class PlayState:
         self._trail: deque[np.ndarray] = deque(
             maxlen=max(2, round(TRAIL_SECONDS * self.level.world.fps) + 1)
         )
-        self._trail.append(self.sim.world.end_effector())
         self._drawable = self.sim.snapshot()  # the latest state without a NaN in it
+        self._trail.append(effector_positions(self.scene, self._drawable))
         self._backlog = 0.0
         self._pending_steps = 0
         # Ticks after the run ended, and the telemetry of the latest of them.
@@ -291,7 +291,7 @@ class PlayState:
         ticks = sim.tick + self._extra_ticks
         fps, rate = self.level.world.fps, self.level.world.tick_rate
         if ticks * fps // rate != (ticks - 1) * fps // rate:
-            self._trail.append(sim.world.end_effector())
+            self._trail.append(effector_positions(self.scene, sim.snapshot()))
 
     def _play_on(self) -> None:
         """A tick after the run is over: its result stays as it ended, while the chain keeps
@@ -365,8 +365,8 @@ class PlayState:
         if np.all(np.isfinite(snapshot.joints)) and np.all(np.isfinite(snapshot.props)):
             self._drawable = snapshot
         snapshot = self._drawable
-        trail = np.array([*self._trail, snapshot.joints[-1]])
-        trail = trail[np.all(np.isfinite(trail), axis=1)]
+        # (m, k, 2): a column per effector; the renderer skips points that are not finite.
+        trail = np.array([*self._trail, effector_positions(self.scene, snapshot)])
         return render_snapshot(self.scene, snapshot, self.camera, self.theme, trail=trail)
 
     def image(self) -> Image.Image:
