@@ -507,21 +507,33 @@ class Simulation:
 
     def snapshot(self) -> Snapshot:
         """The state now, as plain arrays."""
-        target = self.target
         joints = self.world.joint_positions()
         angles = self.world.joint_angles()
+        skeleton = self.world.skeleton
+        path = np.cumsum(angles) if skeleton.is_chain else skeleton.ancestors @ angles
+        if self.world.is_tree:
+            targets = self.targets
+            aims = np.array(
+                [targets.get(name, (math.nan, math.nan)) for name in self.effector_names],
+                dtype=float,
+            )
+            target, errors = None, self._last.errors.copy()
+        else:
+            target, aims, errors = self.target, None, None
         return Snapshot(
             time=self.time,
             tick=self.tick,
             joints=joints,
             angles=angles,
-            world_angles=np.cumsum(angles) + self.world.skeleton.base_angle,
+            world_angles=path + skeleton.base_angle,
             target=None if target is None else target.copy(),
             step_index=self.script.step_index,
             error=self._last.error,
             solver_status=self._last.solver_status,
             torque_limited=self._last.torque_limited.copy(),
             props=self.world.prop_states(),
+            targets=aims,
+            errors=errors,
         )
 
 
@@ -633,6 +645,24 @@ def _scene(level: Level, world: World, script: ScriptRunner) -> Scene:
         else PropShape("box", p.size)
         for p in level.props
     )
+    tree = {}
+    if world.is_tree:
+        names = level.chain.effector_names
+        aims: dict[str, list[tuple[float, float]]] = {name: [] for name in names}
+        for _, step in script.steps:
+            if isinstance(step, ReachStep):
+                for name, point in step.targets(script.default_effector).items():
+                    aims[name].append(point)
+            elif isinstance(step, FollowLine | FollowCircle | FollowLissajous | FollowPolyline):
+                aims[step.effector or script.default_effector].append(follow_path(step)(0.0))
+        tree = {
+            "parents": world.parents.copy(),
+            "effector_links": world.effector_links.copy(),
+            "effector_names": names,
+            "effector_targets": tuple(
+                np.array(aims[name], dtype=float).reshape(-1, 2) for name in names
+            ),
+        }
     return Scene(
         level_name=level.level.name,
         segments=np.array(segments, dtype=float).reshape(-1, 5),
@@ -645,4 +675,5 @@ def _scene(level: Level, world: World, script: ScriptRunner) -> Scene:
         bounds=level.world.bounds,
         step_count=len(script.steps),
         fps=float(level.world.fps),
+        **tree,
     )

@@ -427,6 +427,12 @@ class ScriptRunner:
         self._begin(0, 0.0)
 
     @property
+    def default_effector(self) -> str | None:
+        """The effector a step that names none moves: the only one, or None when the script
+        moves several."""
+        return self._default
+
+    @property
     def step_index(self) -> int:
         """Index of the running step (== number of steps once the script is done)."""
         return len(self.outcomes)

@@ -122,6 +122,9 @@ class World:
         """(n,) parent link index, -1 for a link on the base."""
         self.effector_links = np.array(level.chain.effector_links, dtype=np.int64)
         """(k,) the links whose tips are end effectors."""
+        self.is_tree = level.chain.bones is not None
+        """True for a level of named bones (read its joints in the tree layout), False for a
+        chain of links."""
         base_direction = _direction(self.skeleton.base_angle)
         base_normal = np.array((-base_direction[1], base_direction[0]))
         ends = np.empty((len(links), 2))
@@ -226,12 +229,12 @@ class World:
 
     def joint_positions(self) -> np.ndarray:
         """World positions of the joints, px: for a chain (n + 1, 2), joint 0 .. joint n-1 then
-        the end effector; for a tree (2n, 2), the n link starts then the n link ends (the layout
-        of :func:`~ikgame.kinematics.forward_kinematics`)."""
+        the end effector; for a tree of bones (2n, 2), the n link starts then the n link ends
+        (see :attr:`is_tree`)."""
         starts = [
             b.local_to_world((-h, 0.0)) for b, h in zip(self.bodies, self._halves, strict=True)
         ]
-        if self.skeleton.is_chain:
+        if not self.is_tree:
             return np.array([*starts, self.end_effector()], dtype=float)
         ends = [b.local_to_world((h, 0.0)) for b, h in zip(self.bodies, self._halves, strict=True)]
         return np.array(starts + ends, dtype=float)
