@@ -157,6 +157,7 @@ class Simulation:
             np.array([link.length for link in level.chain.expanded_links]),
             self.world.link_masses,
             self.world.link_moments,
+            parents=None if self.world.skeleton.is_chain else self.world.parents,
         )
         servo = Servo(
             inertia,
@@ -214,6 +215,7 @@ class Simulation:
         self.gait, self._footing = _gait(level, self.world, self.scene)
         """The creature's :class:`~ikgame.control.gait.Gait` when the level has a ``[gait]``."""
         self._gait_targets: dict[str, np.ndarray] = {}
+        self._effector = self.world.end_effector()
         if self._has_goals:
             self.goals.observe(0.0, self.world.prop_states())
 
@@ -283,7 +285,8 @@ class Simulation:
         return self.world.joint_angles()
 
     def joint_positions(self) -> np.ndarray:
-        """(n + 1, 2) joint positions then the end effector, world px."""
+        """World joint positions, px: (n + 1, 2), the joints then the tip, for a chain; (2n, 2),
+        the link starts then the link ends, for a tree of bones."""
         return self.world.joint_positions()
 
     def step(self) -> TickInfo:
@@ -305,7 +308,7 @@ class Simulation:
                 self.time, self.dt, dict(zip(self.effector_names, reached, strict=True))
             )
         else:
-            self.script.observe(self.time, self.dt, self.world.end_effector())
+            self.script.observe(self.time, self.dt, self._effector)
         self._note_blocked(finished)
         if self.gait is not None:
             self._footing.observe(
@@ -357,6 +360,7 @@ class Simulation:
         if self.world.skeleton is not self.controller.skeleton:
             # The base moved: the solver must work from where it is now.
             self.controller.skeleton = self.world.skeleton
+        self._effector = self.world.end_effector()
         errors = self._errors(target)
         error = float(np.max(errors)) if target is not None else math.nan
         limited = self.world.torque_limited()
@@ -410,7 +414,7 @@ class Simulation:
         if isinstance(target, TargetSet):
             reached = self.world.link_ends(target.links)
             return np.hypot(*(reached - target.points).T)
-        return np.array([np.hypot(*(self.world.end_effector() - target))])
+        return np.array([np.hypot(*(self._effector - target))])
 
     def _all_errors(self, target: np.ndarray | TargetSet | None, errors: np.ndarray) -> np.ndarray:
         """(k,) every effector's error, nan for those without a target."""

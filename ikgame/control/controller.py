@@ -91,6 +91,7 @@ class Controller:
         # chain's answer is cached, by one solver object that lives with the chain.
         self.solver = RobustSolver(skeleton, solver)
         """The chain's solver, with recovery and a cache (see :class:`RobustSolver`)."""
+        self.skeleton = skeleton
         self.max_speed = np.asarray(max_speed, dtype=float)
         self.servo = servo
         self.gain = gain
@@ -122,6 +123,8 @@ class Controller:
     @skeleton.setter
     def skeleton(self, skeleton: Skeleton) -> None:
         self.solver.skeleton = skeleton
+        # The damping of the target's pseudo-inverse (see _goal_rates), px^2, per chain.
+        self._damping = (0.01 * skeleton.reach) ** 2 * np.eye(2)
 
     @property
     def solver_name(self) -> str:

@@ -22,6 +22,7 @@ from typing import Final
 
 import numpy as np
 import pymunk
+import pymunk.batch
 
 from ikgame.kinematics import Skeleton
 from ikgame.level.model import BallProp, BoxProp, CircleObstacle, Level, SegmentObstacle
@@ -34,6 +35,20 @@ stay stiff under gravity."""
 
 DIVERGENCE_LIMIT: Final = 1.0e6
 """A body farther than this from the origin (px), or turned this many radians, has blown up."""
+
+_STATE: Final = (
+    pymunk.batch.BodyFields.POSITION
+    | pymunk.batch.BodyFields.ANGLE
+    | pymunk.batch.BodyFields.ANGULAR_VELOCITY
+)
+"""What one batch read takes from every body: a row of x, y, angle, angular velocity."""
+_LOADS: Final = pymunk.batch.BodyFields.FORCE | pymunk.batch.BodyFields.TORQUE
+"""What one batch write gives every body: a row of force x, y and torque."""
+_SET_RATE: Final = pymunk.SimpleMotor.rate.fset
+_SET_MAX_FORCE: Final = pymunk.Constraint.max_force.fset
+_IMPULSE: Final = pymunk.Constraint.impulse.fget
+"""The motor setters and getter themselves, called per motor each tick without pymunk's
+attribute hook."""
 
 _CHAIN_GROUP: Final = 1
 _OBSTACLE_ELASTICITY: Final = 1.0
@@ -182,7 +197,10 @@ class World:
         self.link_moments = np.array([b.moment for b in self.bodies], dtype=float)
         """(n,) moment of inertia of each link about its centre, mass px^2."""
         self._lengths = 2.0 * np.array(self._halves, dtype=float)
+        self._halves_array = 0.5 * self._lengths
         self._feed_forward = np.zeros(self.count)
+        self._reads = pymunk.batch.Buffer()
+        self._rows: _Rows | None = None
 
     @property
     def count(self) -> int:
@@ -195,12 +213,13 @@ class World:
         Read from the continuous body angles, so a free joint that has turned 1.5 times reads
         3 pi; limited joints read in the same frame as their limits.
         """
-        angles = np.fromiter((b.angle for b in self.bodies), float, self.count)
-        return angles - self._of_parents(angles, self.base_body.angle)
+        state, rows = self._state()
+        return state[rows.links, 2] - state[rows.parents, 2]
 
     def link_angles(self) -> np.ndarray:
         """(n,) world angle of each link, radians (continuous, not wrapped)."""
-        return np.fromiter((b.angle for b in self.bodies), float, self.count)
+        state, rows = self._state()
+        return state[rows.links, 2]
 
     @property
     def gravity(self) -> np.ndarray:
@@ -209,23 +228,20 @@ class World:
 
     def joint_velocities(self) -> np.ndarray:
         """(n,) relative angular velocity of each joint (child - parent), rad/s."""
-        w = np.fromiter((b.angular_velocity for b in self.bodies), float, self.count)
-        return w - self._of_parents(w, self.base_body.angular_velocity)
+        state, rows = self._state()
+        return state[rows.links, 3] - state[rows.parents, 3]
 
-    def _of_parents(self, values: np.ndarray, base: float) -> np.ndarray:
-        """(n,) each link's parent's entry of ``values``, ``base`` for the links on the base."""
-        if self.skeleton.is_chain:
-            return np.concatenate(([base], values[:-1]))
-        return np.where(self.parents < 0, base, values[self.parents])
-
-    def _children_sum(self, values: np.ndarray) -> np.ndarray:
-        """Each link's sum of ``values`` over its children (zero for a tip)."""
-        if self.skeleton.is_chain:
-            return np.concatenate((values[1:], np.zeros_like(values[:1])))
-        total = np.zeros_like(values)
-        inner = self.parents >= 0
-        np.add.at(total, self.parents[inner], values[inner])
-        return total
+    def _state(self) -> tuple[np.ndarray, _Rows]:
+        """Every body's x, y, angle and angular velocity in one read (a view of a buffer the
+        next read reuses), and which rows are whose."""
+        batch = self._reads
+        batch.clear()
+        pymunk.batch.get_space_bodies(self.space, _STATE, batch)
+        state = np.frombuffer(batch.float_buf()).reshape(-1, 4)
+        rows = self._rows
+        if rows is None or rows.count != len(state):
+            rows = self._rows = _Rows(self, len(state))
+        return state, rows
 
     def joint_positions(self) -> np.ndarray:
         """World positions of the joints, px: for a chain (n + 1, 2), joint 0 .. joint n-1 then
@@ -288,31 +304,41 @@ class World:
         >>> round(float(world.joint_velocities()[0]), 6)
         4.0
         """
-        angles = self.link_angles()
-        halves = (0.5 * self._lengths)[:, None] * np.stack((np.cos(angles), np.sin(angles)), -1)
-        beyond_forces = self._children_sum(forces)
-        beyond_torques = self._children_sum(torques)
-        pair = forces + beyond_forces
-        # Each body takes its joint's loads and the reactions of its children's, both acting at
-        # the link's ends, so the pivot forces turn it about its centre too.
-        body_torques = (
-            torques - beyond_torques - (halves[:, 0] * pair[:, 1] - halves[:, 1] * pair[:, 0])
-        )
-        body_forces = forces - beyond_forces
-        for body, force, torque in zip(self.bodies, body_forces, body_torques, strict=True):
-            body.force = (float(force[0]), float(force[1]))
-            body.torque = float(torque)
-        for motor, rate, budget in zip(self.motors, rates, budgets, strict=True):
+        state, rows = self._state()
+        angles = state[rows.links, 2]
+        hx, hy = self._halves_array * np.cos(angles), self._halves_array * np.sin(angles)
+        # Each body takes its joint's loads and the reactions of the joints at its end, all
+        # acting at the link's ends, so the pivot forces turn it about its centre too. Bodies
+        # other than links get no load: pymunk clears applied loads after every step.
+        pair = forces.copy()
+        loads = rows.loads
+        if rows.consecutive:
+            pair[:-1] += forces[1:]
+            body = loads[rows.links]  # a view: the links are consecutive rows
+            body[:, :2] = forces
+            body[:-1, :2] -= forces[1:]
+            body[:, 2] = torques
+            body[:-1, 2] -= torques[1:]
+            body[:, 2] -= hx * pair[:, 1] - hy * pair[:, 0]
+        else:
+            beyond_forces, beyond_torques = np.zeros((self.count, 2)), np.zeros(self.count)
+            np.add.at(beyond_forces, rows.hanging_parents, forces[rows.hanging])
+            np.add.at(beyond_torques, rows.hanging_parents, torques[rows.hanging])
+            pair += beyond_forces
+            loads[rows.links, :2] = forces - beyond_forces
+            loads[rows.links, 2] = torques - beyond_torques - (hx * pair[:, 1] - hy * pair[:, 0])
+        pymunk.batch.set_space_bodies(self.space, _LOADS, rows.writes)
+        for motor, rate, budget in zip(self.motors, rates.tolist(), budgets.tolist(), strict=True):
             # SimpleMotor drives (b.w - a.w) toward -rate.
-            motor.rate = -float(rate)
-            motor.max_force = float(budget)
+            _SET_RATE(motor, -rate)
+            _SET_MAX_FORCE(motor, budget)
         self._feed_forward = np.array(torques, dtype=float)
 
     def motor_torques(self) -> np.ndarray:
         """(n,) magnitude of the torque each joint applied during the last step: feed-forward
         plus its motor's correction (the motor's impulse / dt)."""
         dt = self.last_dt
-        motor = np.fromiter((m.impulse / dt for m in self.motors), float, self.count)
+        motor = np.array([_IMPULSE(m) for m in self.motors]) / dt
         return np.abs(self._feed_forward + motor)
 
     def torque_limited(self) -> np.ndarray:
@@ -418,8 +444,9 @@ class World:
 
         A blow-up shows in positions within a tick or two, so velocities are not read.
         """
-        bodies = [self.base_body, *self.bodies, *self.prop_bodies]
-        return not np.all(_sane(_poses(bodies)))
+        state, _ = self._state()
+        # NaN fails the comparison too.
+        return not float(np.max(np.abs(state[:, :3]))) < DIVERGENCE_LIMIT
 
     def divergence(self) -> str | None:
         """The first body that blew up (``"link 3"``, ``"prop 2"``, ``"base"``; counting from
@@ -439,6 +466,43 @@ class World:
 def _direction(angle: float) -> np.ndarray:
     """(2,) unit vector at ``angle`` radians."""
     return np.array((math.cos(angle), math.sin(angle)))
+
+
+class _Rows:
+    """Which row of a batch read of the space's bodies is which body of the world."""
+
+    def __init__(self, world: World, count: int) -> None:
+        batch = pymunk.batch.Buffer()
+        pymunk.batch.get_space_bodies(world.space, pymunk.batch.BodyFields.BODY_ID, batch)
+        ids = np.frombuffer(batch.int_buf(), dtype=np.uintp).tolist()
+        if len(ids) != count:
+            raise ValueError(f"the space has {len(ids)} bodies, a read gave {count} rows")
+        row = {body_id: i for i, body_id in enumerate(ids)}
+        self.count = count
+        links = [row[b.id] for b in world.bodies]
+        base = row[world.base_body.id]
+        parents = world.parents.tolist()
+        above = [base if p < 0 else links[p] for p in parents]
+        self.links: slice | np.ndarray = np.array(links, dtype=int)
+        self.parents: slice | np.ndarray = np.array(above, dtype=int)
+        # A chain's links built in order are consecutive rows after the base: slices, views.
+        first = links[0]
+        self.consecutive = (
+            parents == list(range(-1, len(parents) - 1))
+            and links == list(range(first, first + len(links)))
+            and base == first - 1
+        )
+        if self.consecutive:
+            self.links = slice(first, first + len(links))
+            self.parents = slice(base, base + len(links))
+        # Links hanging from another link's end, last first: the order their loads add up in.
+        hanging = [i for i in reversed(range(len(parents))) if parents[i] >= 0]
+        self.hanging = np.array(hanging, dtype=int)
+        self.hanging_parents = np.array([parents[i] for i in hanging], dtype=int)
+        self.loads = np.zeros((count, 3))
+        """Force x, y and torque per row, written to the space each tick."""
+        self.writes = pymunk.batch.Buffer()
+        self.writes.set_float_buf(self.loads)
 
 
 def _poses(bodies: list[pymunk.Body]) -> np.ndarray:
