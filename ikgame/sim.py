@@ -623,7 +623,7 @@ def _gait(level: Level, world: World, scene: Scene) -> tuple[Gait | None, Footin
         groups=config.groups,
         reach=max(float(spare.min()), 1.0),
     )
-    return gait, Footing(config.legs, ground)
+    return gait, Footing(config.legs, ground, settle=max(level.chain.arrival, 1.0))
 
 
 def _grown(segments: np.ndarray, circles: np.ndarray, by: float) -> tuple[np.ndarray, np.ndarray]:

@@ -443,25 +443,33 @@ class Gait:
 
 class Footing:
     """How well the planted feet held, measured tick by tick: for each leg the steps it took,
-    the farthest its foot slid while planted (px) and the deepest it sank below the ground (px).
+    how far from its spot it came down (px), the farthest it slid once down (px) and the deepest
+    it sank below the ground (px).
 
-    Slip is the distance of the foot from where it stood on the first tick of a planted spell
-    (so a foot still settling after it lands counts too); sinking is how far the foot's tip
-    centre went below the ``ground`` it stands on (the terrain grown by the foot's radius).
+    A planted foot is *down* from the first tick it is within ``settle`` px of the spot the gait
+    planted it on (a foot that lands late comes down a little after the gait's landing time; one
+    that never gets there is down from the start). ``landing`` is its largest distance from the
+    spot on the gait's landing tick, ``slip`` its largest distance from where it came down while
+    it stays planted, and ``sink`` how far its tip's centre went below the ``ground`` it stands
+    on (the terrain grown by the foot's radius).
 
     >>> ground = Terrain(segments=[[-100.0, 0.0, 100.0, 0.0, 0.0]])
-    >>> footing = Footing(("a",), ground)
-    >>> footing.observe({"a": FootState(True, np.zeros(2), 0.0)}, {"a": np.array([0.0, 0.5])})
-    >>> footing.observe({"a": FootState(True, np.zeros(2), 0.0)}, {"a": np.array([1.5, -0.5])})
+    >>> footing = Footing(("a",), ground, settle=1.0)
+    >>> planted = {"a": FootState(True, np.zeros(2), 0.0)}
+    >>> for y in (3.0, 0.5, -0.5):
+    ...     footing.observe(planted, {"a": np.array([0.0, y])})
     >>> footing.as_dict()
-    {'a': {'steps': 1, 'slip': 1.802776, 'sink': 0.5}}
+    {'a': {'steps': 1, 'landing': 3.0, 'slip': 1.0, 'sink': 0.5}}
     """
 
-    def __init__(self, legs: Sequence[str], ground: Terrain) -> None:
+    def __init__(self, legs: Sequence[str], ground: Terrain, *, settle: float) -> None:
         self._legs = tuple(legs)
         self._ground = ground
-        self._since: dict[str, np.ndarray | None] = dict.fromkeys(self._legs)
+        self._settle = _number("settle", settle, positive=True)
+        self._planted = dict.fromkeys(self._legs, False)
+        self._down: dict[str, np.ndarray | None] = dict.fromkeys(self._legs)
         self._steps = dict.fromkeys(self._legs, 0)
+        self._landing = dict.fromkeys(self._legs, 0.0)
         self._slip = dict.fromkeys(self._legs, 0.0)
         self._sink = dict.fromkeys(self._legs, 0.0)
 
@@ -472,20 +480,29 @@ class Footing:
             ground = self._ground.ground_below(float(where[0]), float(where[1]) + 1e4)
             if ground is not None:
                 self._sink[leg] = max(self._sink[leg], ground - float(where[1]))
-            if not feet[leg].planted:
-                self._since[leg] = None
+            foot = feet[leg]
+            if not foot.planted:
+                self._planted[leg], self._down[leg] = False, None
                 continue
-            since = self._since[leg]
-            if since is None:
-                self._since[leg], self._steps[leg] = where.copy(), self._steps[leg] + 1
+            off = float(np.hypot(*(where - foot.point)))
+            if not self._planted[leg]:
+                self._planted[leg] = True
+                self._steps[leg] += 1
+                self._landing[leg] = max(self._landing[leg], off)
+            down = self._down[leg]
+            if down is None:
+                if off <= self._settle:
+                    self._down[leg] = where.copy()
                 continue
-            self._slip[leg] = max(self._slip[leg], float(np.hypot(*(where - since))))
+            self._slip[leg] = max(self._slip[leg], float(np.hypot(*(where - down))))
 
     def as_dict(self) -> dict[str, dict[str, float | int]]:
-        """Per leg: ``steps`` (planted spells begun), ``slip`` and ``sink`` (px, 6 decimals)."""
+        """Per leg: ``steps`` (plantings begun) and ``landing``, ``slip`` and ``sink`` (px, 6
+        decimals)."""
         return {
             leg: {
                 "steps": self._steps[leg],
+                "landing": round(self._landing[leg], 6),
                 "slip": round(self._slip[leg], 6),
                 "sink": round(max(self._sink[leg], 0.0), 6),
             }

@@ -442,9 +442,17 @@ class _Painter:
         roots = np.flatnonzero(parents < 0)
 
         skinned = _skinned(scene.link_sprites, n, "link")
-        # One pedestal when every root hangs from one point; roots spread over a body have none.
+        # One pedestal when every root hangs from one point; roots spread over a body hang from
+        # a body drawn as a bar between the two roots farthest apart.
         if np.all(starts[roots] == starts[roots[0]]):
             self.mount(starts[roots[0]], radii[roots[0]])
+        else:
+            hips = starts[roots]
+            apart = np.hypot(*(hips[:, None, :] - hips[None, :, :]).transpose(2, 0, 1))
+            a, b = np.unravel_index(np.argmax(apart), apart.shape)
+            body = 1.6 * float(radii[roots].max())
+            self.capsule(hips[a], hips[b], body + LINK_OUTLINE * ss, theme.link_outline)
+            self.capsule(hips[a], hips[b], body, theme.base)
         # All outlines first, so where links overlap at a joint the fills merge seamlessly.
         for i in np.flatnonzero(~skinned):
             self.capsule(starts[i], ends[i], radii[i] + LINK_OUTLINE * ss, theme.link_outline)
