@@ -475,11 +475,12 @@ class Footing:
 
     def observe(self, feet: Mapping[str, FootState], positions: Mapping[str, np.ndarray]) -> None:
         """One tick: each foot's phase from the gait and where the foot really is (px)."""
-        for leg in self._legs:
-            where = np.asarray(positions[leg], dtype=float)
-            ground = self._ground.ground_below(float(where[0]), float(where[1]) + 1e4)
-            if ground is not None:
-                self._sink[leg] = max(self._sink[leg], ground - float(where[1]))
+        at = np.array([positions[leg] for leg in self._legs], dtype=float)
+        grounds = self._ground.heights(at[:, 0], at[:, 1] + 1e4)
+        for j, leg in enumerate(self._legs):
+            where = at[j]
+            if not math.isnan(grounds[j]):
+                self._sink[leg] = max(self._sink[leg], float(grounds[j] - where[1]))
             foot = feet[leg]
             if not foot.planted:
                 self._planted[leg], self._down[leg] = False, None

@@ -365,6 +365,10 @@ class RobustSolver:
             search = self._search
             followed = search is not None and search.aims_at(targets, tol) and search.best_far
             return self._keep(plain, goal, followed)
+        if _out_of_reach(skeleton, targets, tol):
+            # No restart brings a target closer than its branch stretched out: the plain solve
+            # already leans toward it (say, while the base still carries the skeleton there).
+            return plain
         return self._recover(
             plain,
             goal,
@@ -476,6 +480,11 @@ class RobustSolver:
         iterations = plain.iterations + used
         if best.error <= tol or search.exhausted:
             status = SolveStatus.SUCCESS if best.error <= tol else SolveStatus.FAILURE
+            if status is SolveStatus.FAILURE:
+                # No pose reaches the goal from here; while the base carries the skeleton the
+                # cached failure serves no longer, and searching again every tick would cost the
+                # whole budget each time.
+                self._quiet = RETRY_CALLS
             answer = Solution(best.angles, status, iterations, best.error, best.errors)
             return self._keep(answer, goal, best is not plain and search.best_far)
         return Solution(best.angles, SolveStatus.PROCESSING, iterations, best.error, best.errors)
@@ -593,6 +602,14 @@ class _Search:
                 return (*seed, True)
             self._far = None
         return None
+
+
+def _out_of_reach(skeleton: Skeleton, targets: TargetSet, tol: float) -> bool:
+    """True when some target lies farther from its branch's root joint than the branch is long
+    (plus ``tol``, px)."""
+    roots = skeleton.root_points()[targets.links]
+    lengths = skeleton.ancestors[targets.links] @ skeleton.lengths
+    return bool(np.any(np.hypot(*(targets.points - roots).T) > lengths + tol))
 
 
 def _near_seeds(

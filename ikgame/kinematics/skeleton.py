@@ -293,7 +293,7 @@ class Skeleton:
         """(n,) bool: which joints have a finite limit on either side."""
         return np.isfinite(self.lower) | np.isfinite(self.upper)
 
-    @property
+    @cached_property
     def reach(self) -> float:
         """Longest distance from the base to any end effector, px (all links straight, each
         root's offset included)."""
