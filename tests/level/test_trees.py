@@ -270,3 +270,11 @@ def test_a_reach_step_with_an_effector_key_is_shown_the_table():
         "t.toml:9: script[0].effector: a reach step names its effectors in a table: "
         "reach = { name = [x, y] }"
     ]
+
+
+def test_a_changed_copy_of_a_chain_expands_its_own_links():
+    chain = ChainConfig(links=[{"length": 10.0, "repeat": 3}])
+    assert len(chain.expanded_links) == 3
+    longer = chain.model_copy(update={"links": [chain.links[0].model_copy(update={"repeat": 7})]})
+    assert len(longer.expanded_links) == 7 and len(chain.expanded_links) == 3
+    assert longer.effector_links == (6,)
