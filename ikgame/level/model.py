@@ -54,6 +54,7 @@ __all__ = [
     "Link",
     "GaitConfig",
     "CHAIN_EFFECTOR",
+    "KEY_PATTERN",
     "SegmentObstacle",
     "CircleObstacle",
     "BallProp",
