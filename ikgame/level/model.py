@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import math
 import re
+import weakref
 from dataclasses import dataclass, fields
 from typing import Annotated, Any, Final, Literal
 
@@ -53,6 +54,7 @@ __all__ = [
     "Link",
     "GaitConfig",
     "CHAIN_EFFECTOR",
+    "KEY_PATTERN",
     "SegmentObstacle",
     "CircleObstacle",
     "BallProp",
@@ -568,6 +570,13 @@ class ChainConfig(_Model):
         >>> [(link.name, link.parent_index, link.effector) for link in chain.expanded_links]
         [('hip', -1, False), ('leg.1', 0, False), ('leg', 1, True)]
         """
+        links = _EXPANDED.get(id(self))
+        if links is None:
+            links = _EXPANDED[id(self)] = self._expand()
+            weakref.finalize(self, _EXPANDED.pop, id(self), None)
+        return links
+
+    def _expand(self) -> tuple[Link, ...]:
         if self.bones is None:
             count = sum(entry.repeat for entry in self.links)
             links: list[Link] = []
@@ -655,6 +664,12 @@ class ChainConfig(_Model):
                 )
             )
         return tuple(out)
+
+
+_EXPANDED: Final[dict[int, tuple[Link, ...]]] = {}
+"""Each live chain's expanded links, by the chain's id: a chain is frozen, so they never change
+(``model_copy`` makes a new object), and the world and controller may ask for them often. Not in
+the instance's ``__dict__``, which ``model_copy`` would carry over to a changed copy."""
 
 
 def _check_bones(bones: list[BoneConfig]) -> None:

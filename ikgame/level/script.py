@@ -80,8 +80,8 @@ class StepOutcome:
     ``source`` is the step's index in the file's ``script`` list. ``score`` is 0..100 for the
     steps that are scored (reach, follow) and None for wait and set. In a tree (a script whose
     effectors are named), ``effectors`` names those the step moved and ``final_errors`` gives
-    each one's final error in that order; ``final_error`` and ``mean_error`` are then the
-    largest over them. A chain's outcomes leave both empty.
+    each one's final error in that order; ``final_error`` is then the largest of them. A
+    chain's outcomes leave both empty.
 
     >>> StepOutcome(0, "reach", True, True, 1.25, 2.0).as_dict()["time_to_reach"]
     1.25
@@ -232,7 +232,13 @@ class _ReachRun(_Run):
     kind = "reach"
 
     def __init__(
-        self, index: int, source: int, step: ReachStep, start: float, default: str | None, named
+        self,
+        index: int,
+        source: int,
+        step: ReachStep,
+        start: float,
+        default: str | None,
+        named: bool,
     ) -> None:
         super().__init__(index, source, start, named)
         self.step = step
@@ -291,7 +297,7 @@ class _FollowRun(_Run):
     kind = "follow"
 
     def __init__(
-        self, index: int, source: int, step, start: float, default: str | None, named
+        self, index: int, source: int, step, start: float, default: str | None, named: bool
     ) -> None:
         super().__init__(index, source, start, named)
         self.step = step
@@ -351,7 +357,13 @@ class _WaitRun(_Run):
     kind = "wait"
 
     def __init__(
-        self, index: int, source: int, step: WaitStep, start: float, default: str | None, named
+        self,
+        index: int,
+        source: int,
+        step: WaitStep,
+        start: float,
+        default: str | None,
+        named: bool,
     ) -> None:
         super().__init__(index, source, start, named)
         self.step = step

@@ -13,6 +13,7 @@ from hypothesis import strategies as st
 from ikgame.level.library import LEVELS_DIR
 from ikgame.level.loader import LevelError, load_level, parse_level
 from ikgame.level.model import MAX_LINKS, ChainConfig, GaitConfig, Level
+from ikgame.level.script import ScriptRunner
 
 ROOT = Path(__file__).resolve().parents[2]
 TREES = sorted((ROOT / "tests" / "data" / "levels" / "trees").glob("*.toml"))
@@ -269,4 +270,33 @@ def test_a_reach_step_with_an_effector_key_is_shown_the_table():
     assert _problems(text + 'effector = "tip"\n') == [
         "t.toml:9: script[0].effector: a reach step names its effectors in a table: "
         "reach = { name = [x, y] }"
+    ]
+
+
+def test_a_changed_copy_of_a_chain_expands_its_own_links():
+    chain = ChainConfig(links=[{"length": 10.0, "repeat": 3}])
+    assert len(chain.expanded_links) == 3
+    longer = chain.model_copy(update={"links": [chain.links[0].model_copy(update={"repeat": 7})]})
+    assert len(longer.expanded_links) == 7 and len(chain.expanded_links) == 3
+    assert longer.effector_links == (6,)
+
+
+@pytest.mark.parametrize("path", TREES, ids=[p.stem for p in TREES])
+def test_a_tree_level_plays_through_its_script_when_every_effector_is_on_its_target(path):
+    level = load_level(path)
+    runner = ScriptRunner(level.script, level.script_effectors)
+    dt, tick, changes = 1.0 / level.world.tick_rate, 0, []
+    while not runner.done and tick * dt < level.level.duration:
+        targets = runner.targets
+        changes += runner.take_changes()
+        tick += 1
+        runner.observe(tick * dt, dt, targets)
+    outcomes = runner.finish(tick * dt)
+    assert all(o.passed for o in outcomes), [(o.index, o.note) for o in outcomes]
+    scored = [o for o in outcomes if o.kind in ("reach", "follow")]
+    assert scored and all(set(o.effectors) <= set(level.script_effectors) for o in scored)
+    # A follow step's target moves on after each tick's read, a reach step's stays put.
+    assert all(o.final_error == 0.0 for o in scored if o.kind == "reach")
+    assert [bool(c.moves_base) for c in changes] == [
+        s.set.moves_base for s in level.script if hasattr(s, "set")
     ]
