@@ -319,7 +319,7 @@ class LinkConfig(_Model):
         5.0e7, gt=0, le=1e15, allow_inf_nan=False, description="Motor torque limit (mass px^2/s^2)."
     )
     max_speed: float = Field(
-        360.0, gt=0, le=36000, allow_inf_nan=False, description="Motor speed limit, deg/s."
+        360.0, ge=0.01, le=36000, allow_inf_nan=False, description="Motor speed limit, deg/s."
     )
     repeat: int = Field(1, ge=1, le=MAX_LINKS, description="Use this link this many times.")
     sprite: SpritePath | None = _sprite_field(
