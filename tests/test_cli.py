@@ -511,3 +511,65 @@ def test_a_tree_run_twice_writes_byte_identical_results_motion_and_frames(tmp_pa
         assert all(leg["steps"] > 0 for leg in results["footing"].values()), results["footing"]
     else:
         assert results["status"] == "passed"
+
+
+_TWO_HANDS_WAITING = """[level]
+name = "Wait first"
+duration = 0.5
+
+[chain]
+angle = 90.0
+
+[[chain.bones]]
+name = "torso"
+length = 60.0
+
+[[chain.bones]]
+name = "left"
+parent = "torso"
+angle = 60.0
+length = 40.0
+
+[[chain.bones]]
+name = "right"
+parent = "torso"
+angle = -60.0
+length = 40.0
+
+[[script]]
+wait = 0.2
+
+[[script]]
+reach = { left = [-50.0, 80.0], right = [50.0, 80.0] }
+"""
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="a tick without any target gives a tree one error instead of one per effector "
+    "(Simulation._all_errors), and the HUD refuses the frame: 'snapshot has 1 errors for 2 "
+    "effectors', exit 1",
+)
+def test_a_tree_whose_script_starts_with_a_wait_draws_its_frames(tmp_path, capsys):
+    level = tmp_path / "wait_first.toml"
+    level.write_text(_TWO_HANDS_WAITING, encoding="utf-8")
+    args = ["run", str(level), "--quiet", "--no-gif", "--size", "64x36", "--workers", "1"]
+    assert main([*args, "--out", str(tmp_path / "out")]) == 0, capsys.readouterr().err
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="a sprite_scale the model accepts (5e-324) times a camera scale below 1 underflows to "
+    "0: draw_sprite inverts a zero matrix, LinAlgError 'Singular matrix', exit 1",
+)
+def test_a_vanishingly_small_sprite_is_drawn_as_nothing(tmp_path, capsys):
+    level = tmp_path / "tiny_sprite.toml"
+    level.write_text(
+        '[level]\nname = "Tiny sprite"\nduration = 0.2\n'
+        "[world]\nbounds = [-300.0, -200.0, 300.0, 200.0]\n"
+        '[chain]\n[[chain.links]]\nlength = 60.0\nsprite = "sprites/ball.png"\n'
+        "sprite_scale = 5e-324\n[[script]]\nwait = 0.1\n",
+        encoding="utf-8",
+    )
+    args = ["run", str(level), "--quiet", "--no-gif", "--size", "97x53", "--workers", "1"]
+    assert main([*args, "--out", str(tmp_path / "out")]) == 0, capsys.readouterr().err
