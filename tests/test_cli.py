@@ -573,3 +573,56 @@ def test_a_vanishingly_small_sprite_is_drawn_as_nothing(tmp_path, capsys):
     )
     args = ["run", str(level), "--quiet", "--no-gif", "--size", "97x53", "--workers", "1"]
     assert main([*args, "--out", str(tmp_path / "out")]) == 0, capsys.readouterr().err
+
+
+_STILL_JOINT = """[level]
+name = "A joint that cannot turn"
+duration = 3.0
+
+[world]
+gravity = [0.0, 0.0]
+
+[chain]
+angle = 0.0
+
+[[chain.bones]]
+name = "still"
+at = [-20.0, 0.0]
+angle = 90.0
+length = 50.0
+max_speed = 5e-324
+
+[[chain.bones]]
+name = "arm"
+at = [20.0, 0.0]
+angle = 90.0
+length = 50.0
+
+[[script]]
+follow = "line"
+effector = "arm"
+from = [20.0, 50.0]
+to = [60.0, 30.0]
+duration = 0.8
+"""
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="max_speed = 5e-324 deg/s is accepted but is 0 rad/s: the feed-forward of a moving "
+    "target divides the still branch's zero rate by it (Controller._goal_rates: 0/0, NaN), "
+    "the NaN reaches a motor's max force and Chipmunk aborts the process (SIGABRT, exit 134, "
+    "'maxForce must be positive')",
+)
+def test_a_joint_whose_speed_limit_rounds_to_zero_does_not_abort_the_run(tmp_path):
+    # In a child process: the abort would take the test run down with it.
+    level = tmp_path / "still.toml"
+    level.write_text(_STILL_JOINT, encoding="utf-8")
+    proc = subprocess.run(
+        [sys.executable, "-m", "ikgame", "run", str(level), "--no-frames", "--quiet"],
+        capture_output=True,
+        text=True,
+        cwd=tmp_path,
+    )
+    assert proc.returncode in (0, 2), proc.stderr
+    assert "Traceback" not in proc.stderr
