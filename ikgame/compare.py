@@ -13,6 +13,11 @@ drawing stays out of the simulation's layer.
 Everything in a comparison is deterministic for a given level except the wall-clock timing of
 the solver calls, which ``compare.json`` keeps apart under ``wall_clock``.
 
+A tree of bones is measured over all of its effectors: the path length adds up every effector's
+travel (``compare.json`` also lists each one's), the reach points are every effector's targets,
+and a creature's runs report their footing, as ``results.json`` does. A chain's comparison is
+what it always was.
+
 Units: time s, lengths and errors px, angles rad.
 """
 
@@ -22,7 +27,7 @@ import io
 import math
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Final
 
@@ -31,8 +36,8 @@ from rich.markup import escape
 from rich.table import Table
 
 from ikgame._files import write_atomic, write_json
-from ikgame.kinematics import SOLVERS, Solution
-from ikgame.level.model import Level
+from ikgame.kinematics import SOLVERS, Solution, TargetSet
+from ikgame.level.model import CHAIN_EFFECTOR, Level
 from ikgame.level.script import StepOutcome
 from ikgame.physics.world import World
 from ikgame.render.plot import ComparisonPlot, SolverTrace, render_comparison
@@ -84,7 +89,8 @@ class SolverRun:
         steps: per-step outcomes (time to reach in s, final and mean error in px).
         ticks: physics ticks run.
         sim_time: simulated time the level took, s.
-        path_length: distance the end effector travelled, px (sum of per-tick displacements).
+        path_length: distance the end effector travelled, px (sum of per-tick displacements);
+            in a tree, every effector's distance added up.
         mean_squared_jerk: mean over ticks of the summed squared jerk of the joint angles,
             rad^2/s^6 (NaN with fewer than four poses).
         tracking_error: mean error over the follow steps weighted by their duration, px; None
@@ -99,9 +105,17 @@ class SolverRun:
             ticks before the one that blew up; so do ``errors``, ``path`` and ``targets``).
         errors: (ticks,) end-effector distance to the target after each tick, px (NaN without
             a target).
-        path: (ticks + 1, 2) end-effector position at the start and after each tick, px.
+        path: (ticks + 1, 2) end-effector position at the start and after each tick, px (a
+            tree's first effector).
         angles: (ticks + 1, n) measured local joint angles at the start and after each tick, rad.
-        targets: (ticks, 2) the target during each tick, px (NaN without a target).
+        targets: (ticks, 2) the target during each tick, px (NaN without a target; a tree's
+            first effector).
+        effectors: the effectors' names, in the order of the last axis but one of ``paths``
+            and ``effector_targets`` (``("tip",)`` for a chain).
+        paths: (ticks + 1, k, 2) every effector's position at the start and after each tick, px.
+        effector_targets: (ticks, k, 2) every effector's target during each tick, px (NaN
+            without one).
+        footing: a creature's footing per leg, as in ``results.json``; empty without a gait.
     """
 
     solver: str
@@ -122,9 +136,24 @@ class SolverRun:
     path: np.ndarray
     angles: np.ndarray
     targets: np.ndarray
+    effectors: tuple[str, ...] = ("tip",)
+    paths: np.ndarray = field(default_factory=lambda: np.zeros((0, 1, 2)))
+    effector_targets: np.ndarray = field(default_factory=lambda: np.zeros((0, 1, 2)))
+    footing: dict[str, dict[str, float | int]] = field(default_factory=dict)
+
+    @property
+    def path_lengths(self) -> dict[str, float]:
+        """Distance each effector travelled, px, by name."""
+        return {name: _travel(self.paths[:, j]) for j, name in enumerate(self.effectors)}
 
     def as_dict(self) -> dict[str, object]:
-        """Plain data in a fixed key order; timing under ``wall_clock``."""
+        """Plain data in a fixed key order; timing under ``wall_clock``. A tree's runs add each
+        effector's path length, a creature's its footing."""
+        tree = {}
+        if self.effectors != (CHAIN_EFFECTOR,):
+            tree["path_lengths"] = {k: _plain(v) for k, v in self.path_lengths.items()}
+        if self.footing:
+            tree["footing"] = self.footing
         return {
             "status": self.status,
             "score": _plain(self.score),
@@ -139,6 +168,7 @@ class SolverRun:
             "torque_limited": _plain(self.torque_limited),
             "solver_calls": self.solver_calls,
             "steps": [s.as_dict() for s in self.steps],
+            **tree,
             "wall_clock": {"solver_us_per_tick": _plain(self.solver_us_per_tick)},
         }
 
@@ -153,8 +183,10 @@ class Comparison:
         runs: one :class:`SolverRun` per solver, in the order asked for.
         base: where the chain is mounted, px.
         reach: the chain's length, px.
-        start_pose: (n + 1, 2) joint positions then the end effector before the first tick, px.
-        reach_points: (k, 2) the reach targets in the order the script ran them, px.
+        start_pose: (n + 1, 2) joint positions then the end effector before the first tick, px;
+            for a tree, a line that walks every bone out and back from the base.
+        reach_points: (k, 2) the reach targets in the order the script ran them, px (in a
+            tree, each reach step's effectors' targets in the step's order).
         tolerance: the reach steps' arrival tolerance, px, when they share one (else None).
     """
 
@@ -205,7 +237,7 @@ class Comparison:
                     solver=run.solver,
                     status=run.status,
                     sim_time=run.sim_time,
-                    path_length=run.path_length,
+                    path_length=run.path_lengths[run.effectors[0]],
                     times=run.times,
                     errors=run.errors,
                     path=run.path,
@@ -256,7 +288,7 @@ def compare_level(
         runs=tuple(runs),
         base=(float(level.chain.base[0]), float(level.chain.base[1])),
         reach=world.skeleton.reach,
-        start_pose=world.joint_positions(),
+        start_pose=_start_pose(world),
         reach_points=_reach_points(runs[0]),
         tolerance=tolerances.pop() if len(tolerances) == 1 else None,
     )
@@ -268,16 +300,65 @@ def _step_ticks(run: SolverRun, step: StepOutcome) -> np.ndarray:
     return (run.times > step.started + 1e-9) & (run.times <= ended + 1e-9)
 
 
+def _start_pose(world: World) -> np.ndarray:
+    """The pose before the first tick as one line: a chain's joints then its tip; a tree's
+    bones walked depth first from the base, each out to its tip and back (a line the picture
+    draws as the tree), px.
+
+    >>> lvl = Level.model_validate({"level": {"name": "x", "duration": 0.1},
+    ...     "chain": {"angle": 0.0, "bones": [{"name": "a", "length": 10.0},
+    ...     {"name": "b", "parent": "a", "length": 5.0, "angle": 90.0},
+    ...     {"name": "c", "parent": "a", "length": 5.0, "angle": -90.0}]},
+    ...     "script": [{"wait": 0.1}]})
+    >>> _start_pose(World(lvl)).round(6).tolist()
+    [[0.0, 0.0], [0.0, 0.0], [10.0, 0.0], [10.0, 5.0], [10.0, 0.0], [10.0, -5.0], [10.0, 0.0], [0.0, 0.0], [0.0, 0.0]]
+    """
+    joints = world.joint_positions()
+    if not world.is_tree:
+        return joints
+    count = len(world.parents)
+    starts, ends = joints[:count], joints[count:]
+    children: list[list[int]] = [[] for _ in range(count + 1)]  # the last: the base's
+    for i, parent in enumerate(world.parents):
+        children[parent].append(i)  # -1, a root, is the base's
+    base = np.asarray(world.skeleton.base, dtype=float)
+    line = [base]
+    # Depth first without recursion: a tree may be 200 bones deep.
+    stack: list[tuple[int, bool]] = [(root, False) for root in reversed(children[-1])]
+    while stack:
+        link, back = stack.pop()
+        if back:
+            line.append(starts[link])
+            if world.parents[link] < 0:
+                line.append(base)
+            continue
+        if world.parents[link] < 0:
+            line.append(starts[link])
+        line.append(ends[link])
+        stack.append((link, True))
+        stack += [(child, False) for child in reversed(children[link])]
+    return np.array(line, dtype=float)
+
+
+def _step_effectors(run: SolverRun, step: StepOutcome) -> list[int]:
+    """Which of the run's effectors ``step`` moves: those it names in a tree, else the tip."""
+    if run.effectors == (CHAIN_EFFECTOR,):
+        return [0]
+    return [run.effectors.index(name) for name in step.effectors]
+
+
 def _reach_points(run: SolverRun) -> np.ndarray:
     """The reach targets in the order the script ran them, read off the run itself (so the
     picture needs to know nothing of how a level spells its steps)."""
     points = []
     for step in run.steps:
         if step.kind == "reach":
-            targets = run.targets[_step_ticks(run, step)]
-            targets = targets[np.all(np.isfinite(targets), axis=1)]
-            if len(targets):
-                points.append(targets[0])
+            ticks = _step_ticks(run, step)
+            for j in _step_effectors(run, step):
+                targets = run.effector_targets[ticks, j]
+                targets = targets[np.all(np.isfinite(targets), axis=1)]
+                if len(targets):
+                    points.append(targets[0])
     return np.array(points, dtype=float).reshape(-1, 2)
 
 
@@ -287,10 +368,12 @@ def _moving_targets(run: SolverRun) -> list[np.ndarray]:
     for step in run.steps:
         if step.kind == "reach":
             continue
-        targets = run.targets[_step_ticks(run, step)]
-        targets = targets[np.all(np.isfinite(targets), axis=1)]
-        if len(targets) > 1 and np.ptp(targets, axis=0).max() > 0.0:
-            trails.append(targets)
+        ticks = _step_ticks(run, step)
+        for j in _step_effectors(run, step):
+            targets = run.effector_targets[ticks, j]
+            targets = targets[np.all(np.isfinite(targets), axis=1)]
+            if len(targets) > 1 and np.ptp(targets, axis=0).max() > 0.0:
+                trails.append(targets)
     return trails
 
 
@@ -314,44 +397,56 @@ def _scaled(progress: Callable[[float], None], start: float, span: float):
 
 
 class _TimedSolve:
-    """A solver function that also adds up the wall-clock time of its calls.
+    """Solver functions that also add up the wall-clock time of their calls.
 
     The timing hook: :class:`~ikgame.control.controller.Controller` calls ``self.solver.solve``
-    once per tick with a target, so replacing that method with this wrapper times the solver
-    (recovery included) alone.
+    (a chain) or ``self.solver.solve_targets`` (a tree) once per tick with a target, so
+    replacing both methods with :meth:`wrap` of them times the solver (recovery included) alone.
     ``Simulation(level, solver=name)`` pins the solver for the run (a level's ``set`` steps do
     not switch it), so nothing replaces the wrapper once it is in place.
     """
 
-    def __init__(self, solve: Callable[..., Solution]) -> None:
-        self.solve = solve
+    def __init__(self) -> None:
         self.calls = 0
         self.iterations = 0
         self.nanoseconds = 0
 
-    def __call__(
-        self, angles: np.ndarray, target: np.ndarray, *, max_iterations: int, tolerance: float
-    ) -> Solution:
-        start = time.perf_counter_ns()
-        solution = self.solve(angles, target, max_iterations=max_iterations, tolerance=tolerance)
-        self.nanoseconds += time.perf_counter_ns() - start
-        self.calls += 1
-        self.iterations += solution.iterations
-        return solution
+    def wrap(self, solve: Callable[..., Solution]) -> Callable[..., Solution]:
+        """``solve``, timed."""
+
+        def timed(
+            angles: np.ndarray,
+            target: np.ndarray | TargetSet,
+            *,
+            max_iterations: int,
+            tolerance: float,
+        ) -> Solution:
+            start = time.perf_counter_ns()
+            solution = solve(angles, target, max_iterations=max_iterations, tolerance=tolerance)
+            self.nanoseconds += time.perf_counter_ns() - start
+            self.calls += 1
+            self.iterations += solution.iterations
+            return solution
+
+        return timed
 
 
 def _run_solver(level: Level, name: str, progress: Callable[[float], None] | None) -> SolverRun:
     sim = Simulation(level, solver=name, record=False)
-    timed = _TimedSolve(sim.controller.solver.solve)
-    sim.controller.solver.solve = timed
+    timed = _TimedSolve()
+    solver = sim.controller.solver
+    solver.solve = timed.wrap(solver.solve)
+    solver.solve_targets = timed.wrap(solver.solve_targets)
+    effectors = tuple(sim.effector_names)
     times, errors, targets = [], [], []
     limited = 0
-    path = [sim.world.end_effector()]
+    path = [sim.world.effector_positions()]
     angles = [sim.joint_angles()]
     total = round(level.level.duration * level.world.tick_rate)
     report_every = max(1, total // 100)
     while not sim.done:
-        target = sim.target
+        aims = sim.targets
+        target = [aims.get(effector, (math.nan, math.nan)) for effector in effectors]
         info = sim.step()
         if sim.diverged:
             # The blown-up tick's pose is meaningless; the run ends at the last sane one.
@@ -359,13 +454,14 @@ def _run_solver(level: Level, name: str, progress: Callable[[float], None] | Non
         times.append(info.time)
         errors.append(info.error)
         limited += int(info.torque_limited.sum())
-        targets.append((math.nan, math.nan) if target is None else target)
-        path.append(sim.world.end_effector())
+        targets.append(target)
+        path.append(sim.world.effector_positions())
         angles.append(sim.joint_angles())
         if progress is not None and sim.tick % report_every == 0:
             progress(sim.tick / total)
     result = sim.result
-    path_arr = np.array(path, dtype=float)
+    paths = np.array(path, dtype=float).reshape(-1, len(effectors), 2)
+    aims_arr = np.array(targets, dtype=float).reshape(-1, len(effectors), 2)
     angles_arr = np.array(angles, dtype=float)
     return SolverRun(
         solver=name,
@@ -374,7 +470,7 @@ def _run_solver(level: Level, name: str, progress: Callable[[float], None] | Non
         steps=result.steps,
         ticks=result.ticks,
         sim_time=result.sim_time,
-        path_length=float(np.hypot(*np.diff(path_arr, axis=0).T).sum()),
+        path_length=sum(_travel(paths[:, j]) for j in range(len(effectors))),
         mean_squared_jerk=_mean_squared_jerk(angles_arr, sim.dt),
         tracking_error=_tracking_error(result.steps),
         iterations_per_tick=timed.iterations / timed.calls if timed.calls else 0.0,
@@ -383,10 +479,19 @@ def _run_solver(level: Level, name: str, progress: Callable[[float], None] | Non
         solver_us_per_tick=timed.nanoseconds / timed.calls / 1e3 if timed.calls else None,
         times=np.array(times, dtype=float),
         errors=np.array(errors, dtype=float),
-        path=path_arr,
+        path=paths[:, 0],
         angles=angles_arr,
-        targets=np.array(targets, dtype=float).reshape(-1, 2),
+        targets=aims_arr[:, 0],
+        effectors=effectors,
+        paths=paths,
+        effector_targets=aims_arr,
+        footing=dict(result.footing),
     )
+
+
+def _travel(path: np.ndarray) -> float:
+    """Length of a (ticks + 1, 2) path, px: the sum of its per-tick displacements."""
+    return float(np.hypot(*np.diff(path, axis=0).T).sum())
 
 
 def squared_jerk(angles: np.ndarray, dt: float) -> np.ndarray:
@@ -451,8 +556,8 @@ def write_comparison(out_dir: str | Path, comparison: Comparison) -> list[Path]:
 def comparison_table(comparison: Comparison) -> Table:
     """A rich table with one row per solver: status, score, time to reach each target (s), mean
     final error of the reach steps (px, when the level has some), tracking error (px, when it has
-    follow steps), path length (px), mean squared jerk (rad^2/s^6), solver time (us per tick)
-    and sim time (s).
+    follow steps), the farthest a planted foot slid (px, for a creature), path length (px), mean
+    squared jerk (rad^2/s^6), solver time (us per tick) and sim time (s).
 
     >>> comparison_table  # doctest: +ELLIPSIS
     <function comparison_table at ...>
@@ -460,6 +565,7 @@ def comparison_table(comparison: Comparison) -> Table:
     steps = comparison.runs[0].steps
     reach_steps = [s.index for s in steps if s.kind == "reach"]
     tracking = any(run.tracking_error is not None for run in comparison.runs)
+    footing = any(run.footing for run in comparison.runs)
     table = Table(title=f"{escape(comparison.level)}: solver comparison", show_edge=False)
     table.add_column("solver")
     table.add_column("status")
@@ -470,6 +576,8 @@ def comparison_table(comparison: Comparison) -> Table:
         table.add_column("final error (px)", justify="right")
     if tracking:
         table.add_column("tracking error (px)", justify="right")
+    if footing:
+        table.add_column("foot slip (px)", justify="right")
     for column in ("path (px)", "jerk (rad²/s⁶)", "solver (µs/tick)", "sim time (s)"):
         table.add_column(column, justify="right")
     colour = {"passed": "green", "failed": "yellow", "diverged": "red"}
@@ -488,6 +596,9 @@ def comparison_table(comparison: Comparison) -> Table:
             cells.append(_fmt(float(np.mean(finals)) if finals else None, ".2f"))
         if tracking:
             cells.append(_fmt(run.tracking_error, ".2f"))
+        if footing:
+            slips = [float(leg["slip"]) for leg in run.footing.values()]
+            cells.append(_fmt(max(slips) if slips else None, ".2f"))
         cells += [
             _fmt(run.path_length, ".0f"),
             _fmt(run.mean_squared_jerk, ".3g"),

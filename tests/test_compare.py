@@ -234,3 +234,131 @@ def test_tracking_error_is_the_duration_weighted_mean_of_follow_steps():
     ]
     assert _tracking_error(steps) == pytest.approx((2.0 * 1 + 5.0 * 3) / 4)
     assert _tracking_error(steps[:1]) is None
+
+
+_CHAIN_RUN_KEYS = [
+    "status",
+    "score",
+    "steps_passed",
+    "steps_total",
+    "ticks",
+    "sim_time",
+    "path_length",
+    "mean_squared_jerk",
+    "tracking_error",
+    "iterations_per_tick",
+    "torque_limited",
+    "solver_calls",
+    "steps",
+    "wall_clock",
+]
+
+TWO_ARMS = {
+    "level": {"name": "Two arms", "duration": 2.0},
+    "world": {"gravity": [0.0, 0.0], "tick_rate": 120},
+    "chain": {
+        "angle": 90.0,
+        "bones": [
+            {"name": "torso", "length": 80.0, "limits": [-20.0, 20.0]},
+            {"name": "left", "parent": "torso", "length": 60.0, "repeat": 2, "angle": 60.0},
+            {"name": "right", "parent": "torso", "length": 60.0, "repeat": 2, "angle": -60.0},
+        ],
+    },
+    "script": [
+        {"reach": {"left": [-110.0, 130.0], "right": [110.0, 140.0]}, "hold": 0.2},
+        {
+            "follow": "line",
+            "effector": "right",
+            "from": [110.0, 140.0],
+            "to": [60.0, 190.0],
+            "duration": 0.5,
+        },
+    ],
+}
+
+
+def test_a_chain_compares_with_the_keys_it_always_had(comparison):
+    for run in comparison.runs:
+        assert list(run.as_dict()) == _CHAIN_RUN_KEYS
+        assert run.effectors == ("tip",) and run.paths.shape == (run.ticks + 1, 1, 2)
+        np.testing.assert_array_equal(run.paths[:, 0], run.path)
+
+
+def test_a_tree_is_measured_over_every_effector_and_its_solver_timed():
+    comparison = compare_level(Level.model_validate(TWO_ARMS), ["ccd", "dls"])
+    for run in comparison.runs:
+        assert run.effectors == ("left", "right")
+        # Every tick aims both hands, through the tree's multi-target solve, which is timed.
+        assert run.solver_calls == run.ticks > 0 and run.iterations_per_tick > 0.0
+        assert run.solver_us_per_tick is not None and run.solver_us_per_tick > 0.0
+        lengths = run.path_lengths
+        assert set(lengths) == {"left", "right"} and min(lengths.values()) > 20.0
+        assert run.path_length == pytest.approx(sum(lengths.values()))
+        data = run.as_dict()
+        assert list(data) == [*_CHAIN_RUN_KEYS[:-1], "path_lengths", "wall_clock"]
+        assert data["path_lengths"] == {k: pytest.approx(v, rel=1e-5) for k, v in lengths.items()}
+        np.testing.assert_allclose(run.paths[-1], run.paths[-1])  # finite
+        assert np.isfinite(run.paths).all()
+    # Both hands' points of the reach step, and the right hand's line as a moving target.
+    np.testing.assert_allclose(comparison.reach_points, [(-110.0, 130.0), (110.0, 140.0)])
+    for trace in comparison.plot_data().traces:
+        (trail,) = trace.target_trails
+        assert trail[0] == pytest.approx((110.0, 140.0), abs=1.0)
+        assert trail[-1] == pytest.approx((60.0, 190.0), abs=1.0)
+
+
+def test_a_trees_start_pose_walks_every_bone_out_and_back_from_the_base():
+    level = Level.model_validate(TWO_ARMS)
+    pose = compare_level(level.model_copy(update={"script": level.script[:1]}), ["ccd"]).start_pose
+    segments = level.chain.start_segments()
+    # Base, the root's joint (at the base), each of the 5 bones out and back, the base again.
+    assert len(pose) == 2 * len(segments) + 3
+    assert pose[0] == pytest.approx((0.0, 0.0)) and pose[-1] == pytest.approx((0.0, 0.0))
+    walked = {
+        tuple(np.round(np.concatenate([a, b]), 3)) for a, b in zip(pose, pose[1:], strict=False)
+    }
+    for start, end in segments:
+        assert tuple(np.round([*start, *end], 3)) in walked
+        assert tuple(np.round([*end, *start], 3)) in walked
+
+
+def test_a_creature_reports_its_footing_and_its_feet_slip_in_the_table():
+    legs = [
+        {
+            "name": f"hip{i}",
+            "at": [x, 0.0],
+            "angle": -100.0,
+            "length": 50.0,
+            "limits": [-170.0, -10.0],
+        }
+        for i, x in enumerate((30.0, -30.0))
+    ]
+    feet = [
+        {
+            "name": f"foot{i}",
+            "parent": f"hip{i}",
+            "angle": 20.0,
+            "length": 50.0,
+            "limits": [0.0, 150.0],
+        }
+        for i in range(2)
+    ]
+    level = Level.model_validate(
+        {
+            "level": {"name": "Biped", "duration": 1.5},
+            "chain": {"base": [0.0, 110.0], "angle": 0.0, "bones": [*legs, *feet]},
+            "obstacles": [{"kind": "segment", "a": [-300.0, 0.0], "b": [300.0, 0.0]}],
+            "gait": {"legs": ["foot0", "foot1"], "step_time": 0.2},
+            "script": [{"set": {"base": [60.0, 110.0], "over": 1.0}}, {"wait": 1.4}],
+        }
+    )
+    comparison = compare_level(level, ["dls"])
+    (run,) = comparison.runs
+    assert set(run.footing) == {"foot0", "foot1"}
+    assert sum(leg["steps"] for leg in run.footing.values()) > 0
+    assert run.as_dict()["footing"] == run.footing
+    console = Console(width=240, record=True)
+    console.print(comparison_table(comparison))
+    text = console.export_text()
+    assert "foot slip (px)" in text
+    assert f"{max(leg['slip'] for leg in run.footing.values()):.2f}" in text

@@ -3,7 +3,10 @@
 :func:`generated_level` walks the schema the model publishes (so new fields are fuzzed without a
 change here), samples every number across its whole range (log-uniform where the range spans
 magnitudes, the edges now and then), then caps the sizes that drive a run's cost, so a case runs
-in well under a second. :func:`mutated_text` breaks a level's text the ways a careless or hostile
+in well under a second. Half the generated levels are trees of bones (random parents, several
+roots placed with ``at``, start angles within the limits, effector flags and weights, repeats),
+whose scripts aim several effectors at once, name the effector of their follow and sequence steps
+and turn the base, and some of them creatures whose gait steps some effectors as legs. :func:`mutated_text` breaks a level's text the ways a careless or hostile
 user would: truncation, stray bytes, huge numbers, deep nesting, long keys, markup in strings.
 Everything is driven by one ``random.Random``: a seed is a case.
 """
@@ -63,19 +66,18 @@ def generated_level(rng: random.Random) -> dict[str, Any]:
     if level["level"]["theme"] is None:
         del level["level"]["theme"]
     # A sprite names a file: a shipped one from assets/ now and then, else none.
-    for body in [*level["chain"]["links"], *props]:
+    entries = _entries(level["chain"])
+    for body in [*entries, *props]:
         if "sprite" in body and rng.random() < 0.3:
             body["sprite"] = rng.choice(_SPRITES)
         elif not ("sprite" in body and rng.random() < 0.1):  # a few name a missing file
             for key in ("sprite", "sprite_pivot", "sprite_scale"):
                 body.pop(key, None)
     if rng.random() < 0.5:  # a chain of one material, as most levels have
-        for link in level["chain"]["links"]:
-            link["mass"] = level["chain"]["links"][0].get("mass", 1.0)
-    for link in level["chain"]["links"]:
-        if "limits" in link:
-            low, high = sorted(link["limits"])
-            link["limits"] = [low, high] if low < high else [-90.0, 90.0]
+        for link in entries:
+            link["mass"] = entries[0].get("mass", 1.0)
+    for link in entries:
+        _order_limits(link)
     for region in [level["world"].get("bounds"), *(g["region"] for g in goals)]:
         if region is not None:
             region[:] = _ordered(region)
@@ -85,17 +87,141 @@ def generated_level(rng: random.Random) -> dict[str, Any]:
 
 
 def _make_chain(rng: random.Random, level: dict[str, Any]) -> None:
-    """Make the level a chain of links whose script aims its tip at points, as a chain level
-    is written; tests/level covers trees, effector names and gaits, which runs do not play."""
+    """Make the level a chain of links whose script aims its tip at points, as a chain level is
+    written, or (half the time) a tree of bones whose script names its effectors."""
     chain = level["chain"]
+    level.pop("gait", None)
+    if rng.random() < 0.5:
+        _make_tree(rng, level)
+        return
     chain.pop("bones", None)
     if not chain.get("links"):
         chain["links"] = [_value(rng, _DEFS["LinkConfig"])]
-    level.pop("gait", None)
     for step in level["script"]:
         if isinstance(step.get("reach"), dict):
-            step["reach"] = [round(rng.uniform(-200.0, 200.0), 3) for _ in range(2)]
+            step["reach"] = _point(rng)
         step.pop("effector", None)
+
+
+_BONE_NAMES = ("spine", "arm", "left_hand", "right-hand", "tail", "foot", "HEAD", "7")
+"""Stems of bone names: every kind of character a name may have (letters, digits, _ and -)."""
+_SLIP = 0.02
+"""How often a tree's writer slips: a name that is no effector, a second root without ``at``,
+a start angle outside the limits, a weight on an inner bone, a leg the script also moves."""
+
+
+def _point(rng: random.Random) -> list[float]:
+    return [round(rng.uniform(-200.0, 200.0), 3) for _ in range(2)]
+
+
+def _make_tree(rng: random.Random, level: dict[str, Any]) -> None:
+    """Bones with random parents (each listed after its parent), a script that aims the tree's
+    effectors by name, and now and then a gait that steps some of them as legs."""
+    chain = level["chain"]
+    chain.pop("links", None)
+    count = rng.randint(1, 6)
+    names = [f"{rng.choice(_BONE_NAMES)}{i}" for i in range(count)]
+    bones = []
+    for i, name in enumerate(names):
+        bone = _value(rng, _DEFS["BoneConfig"])
+        for key in ("parent", "at", "angle", "effector", "weight"):
+            bone.pop(key, None)
+        bone["name"] = name
+        if rng.random() < 0.6:  # lengths a body has; else across the schema's range
+            bone["length"] = round(rng.uniform(5.0, 120.0), 3)
+        if i and rng.random() < 0.75:
+            bone["parent"] = rng.choice(names[:i])
+        _order_limits(bone)
+        if rng.random() < 0.8:
+            low, high = bone.get("limits", (-180.0, 180.0))
+            bone["angle"] = round(rng.uniform(low, high), 3)
+            if rng.random() < _SLIP:
+                bone["angle"] = 180.0 if high < 180.0 else -180.0
+        bones.append(bone)
+    roots = [bone for bone in bones if "parent" not in bone]
+    for bone in roots if len(roots) > 1 else roots[:1] if rng.random() < 0.3 else ():
+        if rng.random() > _SLIP:
+            bone["at"] = [round(rng.uniform(-80.0, 80.0), 3), round(rng.uniform(-40.0, 40.0), 3)]
+    parents = {bone.get("parent") for bone in bones}
+    for bone in bones:
+        leaf = bone["name"] not in parents
+        if rng.random() < (0.1 if leaf else 0.15):
+            bone["effector"] = not leaf
+        if bone.get("effector", leaf) or rng.random() < _SLIP:
+            if rng.random() < 0.4:
+                bone["weight"] = _number(rng, _DEFS["BoneConfig"]["properties"]["weight"])
+    effectors = [b["name"] for b in bones if b.get("effector", b["name"] not in parents)]
+    if not effectors and rng.random() > _SLIP:
+        bones[-1]["effector"] = True
+        effectors = [bones[-1]["name"]]
+    chain["bones"] = bones
+    free = effectors
+    if effectors and rng.random() < 0.35:
+        free = _make_gait(rng, level, effectors)
+    _aim_script(rng, level, free, names)
+
+
+def _make_gait(rng: random.Random, level: dict[str, Any], effectors: list[str]) -> list[str]:
+    """A gait whose legs are some of the effectors (all of them, as a walker's, now and then),
+    in groups or the default ones; the body moves so that the feet step. Returns the effectors
+    left to the script."""
+    legs = [name for name in effectors if rng.random() < 0.7] or [effectors[0]]
+    if rng.random() < 0.3:
+        legs = list(effectors)
+    gait = _value(rng, _DEFS["GaitConfig"])
+    gait["legs"] = legs
+    gait.pop("groups", None)
+    if rng.random() < 0.5:
+        shuffled = rng.sample(legs, len(legs))
+        cuts = sorted(rng.sample(range(1, len(legs)), rng.randint(0, len(legs) - 1)))
+        gait["groups"] = [
+            shuffled[a:b] for a, b in zip([0, *cuts], [*cuts, len(legs)], strict=True)
+        ]
+    level["gait"] = gait
+    base = level["chain"].get("base", [0.0, 0.0])
+    move = {"base": [round(base[0] + rng.uniform(-150.0, 150.0), 3), base[1]], "over": 1.0}
+    if rng.random() < 0.3:
+        move["angle"] = round(rng.uniform(-30.0, 30.0), 3)
+    level["script"][:0] = [{"set": move}]
+    if rng.random() < _SLIP:
+        return effectors
+    return [name for name in effectors if name not in legs]
+
+
+def _aim_script(
+    rng: random.Random, level: dict[str, Any], free: list[str], names: list[str]
+) -> None:
+    """Each step names effectors the script may move: a reach table of several at once, a
+    follow or sequence step's ``effector``; with none to move, the step waits instead."""
+    script = level["script"]
+    for i, step in enumerate(script):
+        if "set" in step or "wait" in step:
+            continue
+        if not free:
+            script[i] = {"wait": round(rng.uniform(0.05, 1.0), 3)}
+            continue
+        pick = rng.sample(free, rng.randint(1, len(free)))
+        if rng.random() < _SLIP:
+            pick[0] = rng.choice(names)
+        if "reach" not in step:
+            step["effector"] = pick[0]
+            if len(free) == 1 and rng.random() < 0.5:
+                del step["effector"]
+        elif len(free) == 1 and rng.random() < 0.5:
+            step["reach"] = _point(rng)
+        else:
+            step["reach"] = {name: _point(rng) for name in pick}
+
+
+def _entries(chain: dict[str, Any]) -> list[dict[str, Any]]:
+    """A chain's links or a tree's bones, as the file lists them."""
+    return chain["links"] if "links" in chain else chain["bones"]
+
+
+def _order_limits(link: dict[str, Any]) -> None:
+    if "limits" in link:
+        low, high = sorted(link["limits"])
+        link["limits"] = [low, high] if low < high else [-90.0, 90.0]
 
 
 def _ordered(region: list[float]) -> list[float]:
@@ -111,11 +237,16 @@ def _make_cheap(rng: random.Random, level: dict[str, Any]) -> None:
     world["fps"] = min(world.get("fps", 30), world["tick_rate"])
     info["duration"] = max(info["duration"], 1.0 / world["tick_rate"])
     chain["iterations"] = min(chain.get("iterations", 10), MAX_ITERATIONS)
-    budget = MAX_LINKS
-    for link in chain["links"]:
-        link["repeat"] = max(1, min(link.get("repeat", 1), budget))
-        budget -= link["repeat"]
-    chain["links"] = [link for link in chain["links"] if link["repeat"] >= 1][:MAX_LINKS]
+    # Bones keep one link each (their children name them); links may be cut.
+    entries = _entries(chain)[:MAX_LINKS]
+    budget = MAX_LINKS - len(entries)
+    for entry in entries:
+        entry["repeat"] = 1 + min(entry.get("repeat", 1) - 1, budget)
+        budget -= entry["repeat"] - 1
+    chain["links" if "links" in chain else "bones"] = entries
+    gait = level.get("gait")
+    if gait is not None and rng.random() > _SLIP:  # a step of at least 8 ticks
+        gait["step_time"] = max(gait.get("step_time", 0.3), 9.0 / world["tick_rate"])
     for step in level["script"]:
         for key in ("sequence", "points"):
             if key in step:
@@ -191,15 +322,16 @@ def _number(rng: random.Random, node: dict[str, Any]) -> float:
 def level_toml(level: dict[str, Any]) -> str:
     """A level dict as TOML text, written the way a person would: tables, arrays of tables."""
     lines: list[str] = []
-    for table in ("level", "world", "chain"):
+    for table in ("level", "world", "chain", "gait"):
         if table not in level:
             continue
         body = level[table]
         lines.append(f"[{table}]")
-        lines += [f"{k} = {_toml(v)}" for k, v in body.items() if k != "links"]
-        for link in body.get("links", []) if table == "chain" else []:
-            lines.append("[[chain.links]]")
-            lines += [f"{k} = {_toml(v)}" for k, v in link.items()]
+        lines += [f"{k} = {_toml(v)}" for k, v in body.items() if k not in ("links", "bones")]
+        for key in ("links", "bones") if table == "chain" else ():
+            for link in body.get(key, []):
+                lines.append(f"[[chain.{key}]]")
+                lines += [f"{k} = {_toml(v)}" for k, v in link.items()]
     for array in ("obstacles", "props", "goals", "script"):
         for item in level.get(array, []):
             lines.append(f"[[{array}]]")
