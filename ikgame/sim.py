@@ -419,8 +419,10 @@ class Simulation:
 
     def _all_errors(self, target: np.ndarray | TargetSet | None, errors: np.ndarray) -> np.ndarray:
         """(k,) every effector's error, nan for those without a target."""
+        if target is None:
+            return np.full(len(self.effector_names), math.nan)
         if not isinstance(target, TargetSet):
-            return np.full(1, math.nan) if target is None else errors
+            return errors
         out = np.full(len(self.effector_names), math.nan)
         out[np.searchsorted(self._effector_links, target.links)] = errors
         return out

@@ -557,12 +557,6 @@ reach = { left = [-50.0, 80.0], right = [50.0, 80.0] }
 """
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="a tick without any target gives a tree one error instead of one per effector "
-    "(Simulation._all_errors), and the HUD refuses the frame: 'snapshot has 1 errors for 2 "
-    "effectors', exit 1",
-)
 def test_a_tree_whose_script_starts_with_a_wait_draws_its_frames(tmp_path, capsys):
     level = tmp_path / "wait_first.toml"
     level.write_text(_TWO_HANDS_WAITING, encoding="utf-8")
@@ -570,12 +564,7 @@ def test_a_tree_whose_script_starts_with_a_wait_draws_its_frames(tmp_path, capsy
     assert main([*args, "--out", str(tmp_path / "out")]) == 0, capsys.readouterr().err
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="a sprite_scale the model accepts (5e-324) times a camera scale below 1 underflows to "
-    "0: draw_sprite inverts a zero matrix, LinAlgError 'Singular matrix', exit 1",
-)
-def test_a_vanishingly_small_sprite_is_drawn_as_nothing(tmp_path, capsys):
+def test_a_vanishingly_small_sprite_is_refused_at_its_line(tmp_path, capsys):
     level = tmp_path / "tiny_sprite.toml"
     level.write_text(
         '[level]\nname = "Tiny sprite"\nduration = 0.2\n'
@@ -585,7 +574,8 @@ def test_a_vanishingly_small_sprite_is_drawn_as_nothing(tmp_path, capsys):
         encoding="utf-8",
     )
     args = ["run", str(level), "--quiet", "--no-gif", "--size", "97x53", "--workers", "1"]
-    assert main([*args, "--out", str(tmp_path / "out")]) == 0, capsys.readouterr().err
+    assert main([*args, "--out", str(tmp_path / "out")]) == 2
+    assert "tiny_sprite.toml:10: chain.links[0].sprite_scale" in capsys.readouterr().err
 
 
 _STILL_JOINT = """[level]
@@ -620,13 +610,6 @@ duration = 0.8
 """
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="max_speed = 5e-324 deg/s is accepted but is 0 rad/s: the feed-forward of a moving "
-    "target divides the still branch's zero rate by it (Controller._goal_rates: 0/0, NaN), "
-    "the NaN reaches a motor's max force and Chipmunk aborts the process (SIGABRT, exit 134, "
-    "'maxForce must be positive')",
-)
 def test_a_joint_whose_speed_limit_rounds_to_zero_does_not_abort_the_run(tmp_path):
     # In a child process: the abort would take the test run down with it.
     level = tmp_path / "still.toml"

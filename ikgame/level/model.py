@@ -123,7 +123,7 @@ _THEME_NAME: Final = re.compile(r"^[A-Za-z0-9_-]+$")
 
 Coord = Annotated[float, Field(ge=-MAX_COORD, le=MAX_COORD, allow_inf_nan=False)]
 Fraction = Annotated[float, Field(ge=0, le=1, allow_inf_nan=False)]
-SpriteScale = Annotated[float, Field(gt=0, le=1000, allow_inf_nan=False)]
+SpriteScale = Annotated[float, Field(ge=1e-3, le=1000, allow_inf_nan=False)]
 Vec2 = tuple[Coord, Coord]
 Region = tuple[Coord, Coord, Coord, Coord]
 Length = Annotated[float, Field(ge=MIN_SIZE, le=MAX_COORD, allow_inf_nan=False)]

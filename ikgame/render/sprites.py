@@ -103,6 +103,8 @@ def draw_sprite(
     if x0 >= x1 or y0 >= y1:
         return
     matrix, k = _frame(sprite, anchor, angle, scale)
+    if abs(np.linalg.det(matrix)) < 1e-12:
+        return  # drawn smaller than a millionth of a pixel: nothing to see
     source = _source(sprite, k)
     # Output px (X, Y) of the box -> image px about the pivot (the inverse of the frame), then
     # -> px of the (possibly shrunk) source.

@@ -174,3 +174,11 @@ def test_a_scene_whose_sprites_do_not_match_its_links_is_refused():
     )
     with pytest.raises(ValueError, match="2 link sprites for 1 links"):
         render_snapshot(bad, snap, _camera(), load_theme("light"))
+
+
+def test_a_sprite_drawn_smaller_than_a_pixel_leaves_the_canvas_alone():
+    canvas = Image.new("RGB", (40, 40), "white")
+    red = np.zeros((10, 10, 4), dtype=np.uint8)
+    red[...] = (255, 0, 0, 255)
+    draw_sprite(canvas, Sprite(red, (5.0, 5.0), 1e-300), (20.5, 20.5), 0.3, 1e-30)
+    assert canvas.getcolors() == [(1600, (255, 255, 255))]
