@@ -24,6 +24,7 @@ from ikgame.control.controller import Controller
 from ikgame.control.dynamics import ChainInertia
 from ikgame.control.servo import Servo
 from ikgame.kinematics import SolveStatus
+from ikgame.kinematics.clearance import Avoider, Clearance, Obstacles
 from ikgame.level.model import (
     MAX_COORD,
     BallProp,
@@ -177,6 +178,7 @@ class Simulation:
         self._last = TickInfo(0, 0.0, "processing", 0, math.nan, np.zeros(self.world.count, bool))
         self._result: RunResult | None = None
         self.scene = _scene(level, self.world, self.script)
+        self.controller.avoider = _avoider(self.world, self.scene)
         self._has_goals = bool(level.goals)
         self._watch = BlockWatch(dt=self.dt, arrival=level.chain.arrival)
         self._blocked_target: np.ndarray | None = None
@@ -436,6 +438,14 @@ def run_level(level: Level, *, solver: str | None = None, record: bool = True) -
     sim = Simulation(level, solver=solver, record=record)
     sim.run()
     return sim
+
+
+def _avoider(world: World, scene: Scene) -> Avoider | None:
+    """What keeps the chain clear of the level's static obstacles (None without any)."""
+    obstacles = Obstacles.from_arrays(scene.segments, scene.circles)
+    if not len(obstacles):
+        return None
+    return Avoider(Clearance(world.skeleton, world.link_widths / 2.0, obstacles))
 
 
 def _scene(level: Level, world: World, script: ScriptRunner) -> Scene:

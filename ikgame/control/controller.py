@@ -21,6 +21,7 @@ import numpy as np
 
 from ikgame.control.servo import Servo, ServoCommand
 from ikgame.kinematics import RobustSolver, Skeleton, Solution, SolveStatus, wrap_angle
+from ikgame.kinematics.clearance import Avoider
 from ikgame.kinematics.jacobian import jacobian
 
 __all__ = ["Command", "Controller", "joint_error"]
@@ -78,6 +79,7 @@ class Controller:
         iterations: int = 10,
         arrival: float = 0.5,
         servo: Servo | None = None,
+        avoider: Avoider | None = None,
     ) -> None:
         # Stalls (limits, coils, the long way round a stop) are recovered from, and a settled
         # chain's answer is cached, by one solver object that lives with the chain.
@@ -85,6 +87,8 @@ class Controller:
         """The chain's solver, with recovery and a cache (see :class:`RobustSolver`)."""
         self.max_speed = np.asarray(max_speed, dtype=float)
         self.servo = servo
+        self.avoider = avoider
+        """Keeps the commanded poses and the way to them clear of static obstacles, if set."""
         self.gain = gain
         self.iterations = int(iterations)
         self.arrival = float(arrival)
@@ -114,6 +118,8 @@ class Controller:
     @skeleton.setter
     def skeleton(self, skeleton: Skeleton) -> None:
         self.solver.skeleton = skeleton
+        if self.avoider is not None:
+            self.avoider.clearance.skeleton = skeleton
 
     @property
     def solver_name(self) -> str:
@@ -157,6 +163,8 @@ class Controller:
         self._holding = True
         # A cached answer is one the chain could not get to: solve afresh when released.
         self.solver.reset()
+        if self.avoider is not None:
+            self.avoider.reset()
 
     def release(self) -> None:
         """Solve toward the target again after :meth:`hold`."""
@@ -191,6 +199,8 @@ class Controller:
             solution = self.solver.solve(
                 start, target, max_iterations=self.iterations, tolerance=self.arrival
             )
+            if self.avoider is not None:
+                solution = self.avoider.steer(start, solution, target, self.arrival)
             self._held = solution.angles
         error = joint_error(solution.angles, measured, self._limited)
         if self.servo is None:
