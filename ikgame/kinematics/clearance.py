@@ -34,6 +34,7 @@ from typing import Final
 
 import numpy as np
 
+from ikgame.kinematics.recovery import SETTLED
 from ikgame.kinematics.skeleton import Skeleton
 from ikgame.kinematics.solver import Solution, SolveStatus
 
@@ -73,8 +74,12 @@ POLISH_ITERATIONS: Final = 80
 ROUTE_STEP: Final = 0.3
 """Largest joint change of one edge of a route tree, radians."""
 
-ARRIVED: Final = 0.05
+PASSED: Final = 0.05
 """A chain within this of a via pose on every joint has passed it, radians."""
+
+RELEASE_CALLS: Final = 120
+"""Calls at rest on a clear goal after which the solver answers again even short of the target
+(half a second at 240 ticks/s)."""
 
 _MAX_STEP: Final = 0.2
 _MAX_SAMPLES: Final = 400
@@ -329,11 +334,13 @@ class Clearance:
         fractions = np.linspace(0.0, 1.0, count)[:, None]
         return a + fractions * (b - a)
 
-    def path_clear(self, a: np.ndarray, b: np.ndarray, floor: float = 0.0) -> bool:
-        """Whether the straight joint-space line from ``a`` to ``b`` keeps every link ``floor``
-        px clear. A start already closer than that may only get farther (it is touching)."""
+    def path_clear(self, a: np.ndarray, b: np.ndarray) -> bool:
+        """Whether the straight joint-space line from ``a`` to ``b`` keeps every link half the
+        margin clear (the motors do not follow the line exactly, and a link rubbing along an
+        obstacle drags). A start already closer than that may only get farther."""
         if not len(self.obstacles):
             return True
+        floor = self.margin / 2.0
         gaps = self.smallest_gaps(self._samples(np.asarray(a, float), np.asarray(b, float)))
         return bool(np.all(gaps[1:] >= min(floor, gaps[0] - 1e-9)))
 
@@ -406,7 +413,7 @@ class Clearance:
             largest = float(np.abs(gap).max())
             arrived = largest <= ROUTE_STEP
             nxt = toward if arrived else here + gap * (ROUTE_STEP / largest)
-            if not self.path_clear(here, nxt, self.margin / 2):
+            if not self.path_clear(here, nxt):
                 return added, False
             nodes.append(nxt)
             parents.append(near)
@@ -446,6 +453,7 @@ class Avoider:
         self._goal: np.ndarray | None = None
         self._way: list[np.ndarray] = []
         self._given_up: tuple[float, float] | None = None
+        self._resting = 0
         self._checked: tuple[np.ndarray, float] | None = None
 
     def steer(
@@ -459,17 +467,19 @@ class Avoider:
         if key == self._given_up:
             return solution
         if self._goal is not None:
-            if np.abs(measured - self._goal).max() <= ARRIVED:
-                self.reset()
-            else:
+            if not self._arrived(measured, target, tolerance):
                 return self._follow(measured, solution)
+            self.reset()
         if self._far_enough(measured, solution.angles):
             return solution
-        if solution.status is SolveStatus.FAILURE or room.is_clear(solution.angles):
+        reaches = solution.status is not SolveStatus.PROCESSING
+        if reaches and room.is_clear(solution.angles):
             if room.path_clear(measured, solution.angles):
                 return solution
             goal = solution.angles
         else:
+            # An answer still on its way (PROCESSING) is no goal to route to: a clear one that
+            # arrives is searched for instead.
             goal = room.clear_answer(measured, solution.angles, target, tolerance)
         way = None if goal is None else room.route(measured, goal)
         if way is None:
@@ -478,6 +488,25 @@ class Avoider:
             return solution
         self._target, self._goal, self._way = key, goal, way
         return self._follow(measured, solution)
+
+    def _arrived(self, measured: np.ndarray, target: np.ndarray, tolerance: float) -> bool:
+        """Whether the solver may answer again: the chain has rested on the clear goal (within
+        ``SETTLED`` of it on every joint) for ``RELEASE_CALLS`` calls with its end effector
+        still farther than ``tolerance`` from the target (sagging short, say), where re-solving
+        from the measured pose brings it the last pixels.
+
+        A chain resting on the goal with its end effector on the target keeps the goal until
+        the target moves: the solver's own answer (CCD's from a pose a few px short, or one it
+        followed before) can be another pose, and swinging over to it overshoots.
+        """
+        if np.abs(measured - self._goal).max() > SETTLED:
+            self._resting = 0
+            return False
+        self._resting += 1
+        if self._resting < RELEASE_CALLS:
+            return False
+        end = self.clearance.points(measured)[-1]
+        return math.hypot(*(end - target)) > tolerance
 
     def _far_enough(self, measured: np.ndarray, pose: np.ndarray) -> bool:
         """Whether the chain is so far from every obstacle that neither ``pose`` nor the way to
@@ -497,7 +526,7 @@ class Avoider:
         """The farthest via pose the chain can now turn to in a clear straight line."""
         room = self.clearance
         way = self._way
-        while len(way) > 1 and np.abs(measured - way[0]).max() <= ARRIVED:
+        while len(way) > 1 and np.abs(measured - way[0]).max() <= PASSED:
             way.pop(0)
         for index in range(len(way) - 1, 0, -1):
             if room.path_clear(measured, way[index]):
