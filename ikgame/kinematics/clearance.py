@@ -55,8 +55,9 @@ MARGIN: Final = 2.0
 ACTIVE: Final = 6.0
 """A link closer than this to an obstacle gets a clearance row in the polish, px."""
 
-PATH_STEP: Final = 4.0
-"""Most any point of the chain moves between two poses checked along a path, px."""
+PATH_STEP: Final = 2.0
+"""Most any point of the chain moves between two poses checked along a path, px: as paths keep
+half of ``MARGIN`` clear at the poses checked, no link touches in between."""
 
 ROUTE_NODES: Final = 600
 """Most poses a route search adds to its two trees before it gives up."""
@@ -71,11 +72,11 @@ answers."""
 POLISH_ITERATIONS: Final = 80
 """Iterations one seed of a clear answer is polished for."""
 
+STALE_ITERATIONS: Final = 12
+"""A polish that has not improved on its best pose for this many iterations stops there."""
+
 ROUTE_STEP: Final = 0.3
 """Largest joint change of one edge of a route tree, radians."""
-
-PASSED: Final = 0.05
-"""A chain within this of a via pose on every joint has passed it, radians."""
 
 RELEASE_CALLS: Final = 120
 """Calls at rest on a clear goal after which the solver answers again even short of the target
@@ -242,15 +243,16 @@ class Clearance:
     ) -> Solution:
         """Damped least squares toward ``target`` that keeps every link ``margin`` px clear.
 
-        Returns the best pose seen: clear first, then nearest the target. ``SUCCESS`` when it
-        is clear and within ``tolerance``, else ``PROCESSING``.
+        Returns the best pose seen: clear first, then nearest the target (it stops after
+        ``STALE_ITERATIONS`` without a better one). ``SUCCESS`` when it is clear and within
+        ``tolerance``, else ``PROCESSING``.
         """
         sk = self.skeleton
         pose = sk.clamp(np.asarray(angles, dtype=float).copy())
         target = np.asarray(target, dtype=float)
         n = sk.count
         below = np.tril(np.ones((n, n), dtype=bool))  # below[i, j]: joint j moves link i
-        best, best_key = pose, (math.inf, math.inf)
+        best, best_key, stale = pose, (math.inf, math.inf), 0
         damping = (0.02 * self._lever[0]) ** 2
         for _ in range(iterations):
             pts = self.points(pose)
@@ -262,7 +264,11 @@ class Clearance:
             dist = float(np.hypot(*error))
             key = (max(0.0, -float(gap.min(initial=math.inf))), dist)
             if key < best_key:
-                best, best_key = pose.copy(), key
+                best, best_key, stale = pose.copy(), key, 0
+            else:
+                stale += 1
+                if stale > STALE_ITERATIONS:
+                    break
             if key[0] == 0.0 and dist <= tolerance and gap.min(initial=math.inf) >= self.margin:
                 break
             arms = pts[-1] - pts[:-1]
@@ -523,15 +529,18 @@ class Avoider:
         return gap - room.swept(measured, pose) >= 0.0
 
     def _follow(self, measured: np.ndarray, solution: Solution) -> Solution:
-        """The farthest via pose the chain can now turn to in a clear straight line."""
+        """The farthest via pose the chain can now turn to in a clear straight line; the next
+        one once it rests on a via pose (within ``SETTLED``: each piece is clear from its start,
+        and the chain is there)."""
         room = self.clearance
         way = self._way
-        while len(way) > 1 and np.abs(measured - way[0]).max() <= PASSED:
-            way.pop(0)
         for index in range(len(way) - 1, 0, -1):
             if room.path_clear(measured, way[index]):
                 del way[:index]
                 break
+        else:
+            if len(way) > 1 and np.abs(measured - way[0]).max() <= SETTLED:
+                del way[0]
         status = SolveStatus.PROCESSING if len(way) > 1 else solution.status
         return Solution(way[0], status, solution.iterations, solution.error)
 
