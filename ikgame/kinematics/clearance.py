@@ -49,7 +49,7 @@ __all__ = [
     "Obstacles",
 ]
 
-MARGIN: Final = 2.0
+MARGIN: Final = 4.0
 """Gap a polished answer keeps between a link's surface and an obstacle's, px."""
 
 ACTIVE: Final = 6.0
@@ -59,7 +59,7 @@ PATH_STEP: Final = 2.0
 """Most any point of the chain moves between two poses checked along a path, px: as paths keep
 half of ``MARGIN`` clear at the poses checked, no link touches in between."""
 
-ROUTE_NODES: Final = 600
+ROUTE_NODES: Final = 1500
 """Most poses a route search adds to its two trees before it gives up."""
 
 RANDOM_SEEDS: Final = 12
@@ -393,7 +393,7 @@ class Clearance:
         for _ in range(ROUTE_NODES):
             grow, other = trees
             sample = rng.uniform(low, high)
-            new, _ = self._extend(grow, sample)
+            new, _ = self._extend(grow, sample, reach=True)
             if new is not None:
                 reached, arrived = self._extend(other, grow[0][new], reach=True)
                 if arrived:
