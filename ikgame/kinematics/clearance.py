@@ -78,6 +78,9 @@ STALE_ITERATIONS: Final = 12
 ROUTE_STEP: Final = 0.3
 """Largest joint change of one edge of a route tree, radians."""
 
+AHEAD: Final = 40.0
+"""A chain whose sweep to its via pose is at most this (px) may head for the next one."""
+
 RELEASE_CALLS: Final = 120
 """Calls at rest on a clear goal after which the solver answers again even short of the target
 (half a second at 240 ticks/s)."""
@@ -340,15 +343,18 @@ class Clearance:
         fractions = np.linspace(0.0, 1.0, count)[:, None]
         return a + fractions * (b - a)
 
+    def path_gaps(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """The smallest gap (px) of each pose along the straight joint-space line from ``a`` to
+        ``b``, ``a`` first and ``b`` last, at poses no point moves ``PATH_STEP`` px between."""
+        return self.smallest_gaps(self._samples(np.asarray(a, float), np.asarray(b, float)))
+
     def path_clear(self, a: np.ndarray, b: np.ndarray) -> bool:
         """Whether the straight joint-space line from ``a`` to ``b`` keeps every link half the
         margin clear (the motors do not follow the line exactly, and a link rubbing along an
         obstacle drags). A start already closer than that may only get farther."""
         if not len(self.obstacles):
             return True
-        floor = self.margin / 2.0
-        gaps = self.smallest_gaps(self._samples(np.asarray(a, float), np.asarray(b, float)))
-        return bool(np.all(gaps[1:] >= min(floor, gaps[0] - 1e-9)))
+        return _clear_along(self.path_gaps(a, b), self.margin / 2.0)
 
     def route(self, start: np.ndarray, goal: np.ndarray) -> list[np.ndarray] | None:
         """Via poses from ``start`` to the clear ``goal`` (the goal last), each reached from the
@@ -451,6 +457,7 @@ class Avoider:
 
     def __init__(self, clearance: Clearance) -> None:
         self.clearance = clearance
+        self._skeleton = clearance.skeleton
         self.reset()
 
     def reset(self) -> None:
@@ -460,6 +467,7 @@ class Avoider:
         self._way: list[np.ndarray] = []
         self._given_up: tuple[float, float] | None = None
         self._resting = 0
+        self._line: tuple[np.ndarray, np.ndarray, float] | None = None
         self._checked: tuple[np.ndarray, float] | None = None
 
     def steer(
@@ -467,6 +475,9 @@ class Avoider:
     ) -> Solution:
         """The solution to command this tick (see the class)."""
         room = self.clearance
+        if room.skeleton is not self._skeleton:
+            # The base moved: gaps measured before no longer bound anything.
+            self._skeleton, self._checked, self._line = room.skeleton, None, None
         key = (float(target[0]), float(target[1]))
         if key != self._target:
             self._target, self._goal, self._way = None, None, []
@@ -480,7 +491,7 @@ class Avoider:
             return solution
         reaches = solution.status is not SolveStatus.PROCESSING
         if reaches and room.is_clear(solution.angles):
-            if room.path_clear(measured, solution.angles):
+            if self._clear_way(measured, solution.angles):
                 return solution
             goal = solution.angles
         else:
@@ -514,6 +525,31 @@ class Avoider:
         end = self.clearance.points(measured)[-1]
         return math.hypot(*(end - target)) > tolerance
 
+    def _clear_way(self, measured: np.ndarray, pose: np.ndarray) -> bool:
+        """Whether the straight line from ``measured`` to ``pose`` is clear.
+
+        A chain moving along a line checked before is on it still, give or take: every pose of
+        the new line is within ``slack`` px (the larger of how far the chain is off the old line
+        and how far the new end is from the old one) of a pose of the old line's rest, so the
+        old line's smallest gap less that slack bounds the new one's, and the line is sampled
+        afresh only when that bound runs out.
+        """
+        room = self.clearance
+        floor = room.margin / 2.0
+        line = self._line
+        if line is not None:
+            start, end, gap = line
+            d = end - start
+            span = float(d @ d)
+            s = 0.0 if span == 0.0 else min(max(float((measured - start) @ d) / span, 0.0), 1.0)
+            slack = max(room.swept(start + s * d, measured), room.swept(end, pose))
+            if gap - slack >= floor:
+                return True
+        gaps = room.path_gaps(measured, pose)
+        clear = _clear_along(gaps, floor)
+        self._line = (measured.copy(), pose.copy(), float(gaps.min())) if clear else None
+        return clear
+
     def _far_enough(self, measured: np.ndarray, pose: np.ndarray) -> bool:
         """Whether the chain is so far from every obstacle that neither ``pose`` nor the way to
         it can touch one. The gap is measured afresh only when the motion since the last
@@ -529,20 +565,28 @@ class Avoider:
         return gap - room.swept(measured, pose) >= 0.0
 
     def _follow(self, measured: np.ndarray, solution: Solution) -> Solution:
-        """The farthest via pose the chain can now turn to in a clear straight line; the next
-        one once it rests on a via pose (within ``SETTLED``: each piece is clear from its start,
-        and the chain is there)."""
+        """The via pose to head for: the next one once the chain, near the current one (within
+        ``AHEAD`` px of sweep), can turn to it in a clear straight line, or once it rests on the
+        current one (within ``SETTLED``: each piece is clear from its start, and the chain is
+        there)."""
         room = self.clearance
         way = self._way
-        for index in range(len(way) - 1, 0, -1):
-            if room.path_clear(measured, way[index]):
-                del way[:index]
-                break
-        else:
-            if len(way) > 1 and np.abs(measured - way[0]).max() <= SETTLED:
+        while len(way) > 1:
+            near = room.swept(measured, way[0]) <= AHEAD
+            if near and room.path_clear(measured, way[1]):
                 del way[0]
+            elif np.abs(measured - way[0]).max() <= SETTLED:
+                del way[0]
+            else:
+                break
         status = SolveStatus.PROCESSING if len(way) > 1 else solution.status
         return Solution(way[0], status, solution.iterations, solution.error)
+
+
+def _clear_along(gaps: np.ndarray, floor: float) -> bool:
+    """Whether a path with these gaps (start first) keeps ``floor`` px clear, or at least never
+    comes closer than its start already is."""
+    return bool(np.all(gaps[1:] >= min(floor, gaps[0] - 1e-9)))
 
 
 def _distance_to(x: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
