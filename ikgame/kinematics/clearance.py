@@ -476,8 +476,11 @@ class Avoider:
         """The solution to command this tick (see the class)."""
         room = self.clearance
         if room.skeleton is not self._skeleton:
-            # The base moved: gaps measured before no longer bound anything.
-            self._skeleton, self._checked, self._line = room.skeleton, None, None
+            # The base moved: a plan made for it is stale, and one made now would be stale by the
+            # next tick, so the solver answers until the base stands still again.
+            self._skeleton = room.skeleton
+            self.reset()
+            return solution
         key = (float(target[0]), float(target[1]))
         if key != self._target:
             self._target, self._goal, self._way = None, None, []

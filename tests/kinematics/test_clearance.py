@@ -187,3 +187,17 @@ def test_clearance_is_for_chains_with_one_radius_per_link():
         Clearance(tree, np.ones(3), none)
     with pytest.raises(ValueError, match="radii"):
         Clearance(Skeleton.chain([1.0, 1.0]), np.ones(3), none)
+
+
+def test_while_the_base_moves_the_solver_answers_and_the_plan_is_dropped():
+    room = _shelf_room()
+    guide = Avoider(room)
+    target = np.array([290.0, 45.0])
+    measured = np.array([0.5, 0.3, 0.2])
+    through = Solution(np.array([-0.3, -1.2, -0.6]), SolveStatus.SUCCESS, 10, 0.0)
+    assert guide.steer(measured, through, target, 0.5) is not through  # planned round
+    room.skeleton = room.skeleton.moved_to((5.0, 0.0))
+    assert guide.steer(measured, through, target, 0.5) is through  # stale for a moving base
+    # Standing still again, it plans afresh for where the base is now.
+    replanned = guide.steer(measured, through, target, 0.5)
+    assert replanned is not through and room.is_clear(replanned.angles)
