@@ -22,8 +22,10 @@ arrays, and the chain's links, each a capsule (a segment with a radius, half the
   is steered through these via poses one after the other.
 
 :class:`Avoider` does this tick by tick for a controller: it takes the solver's answer and
-returns the pose to command, caching the clear answer and the route for the target until the
-chain has arrived, so a settled chain costs one gap check. Angles are radians, distances px.
+returns the pose to command, keeping the clear answer and the route for the target until it
+moves, so they are searched once; a chain at rest or in the open costs a dot product a tick.
+While the base moves it plans nothing (a plan would be stale by the next tick). Chains only.
+Angles are radians, distances px.
 """
 
 from __future__ import annotations
@@ -439,12 +441,14 @@ class Avoider:
 
     Call :meth:`steer` with the measured pose, the solver's solution and the target every tick.
     It returns the solution unchanged when its pose is clear and the chain can turn to it in a
-    clear straight line (one gap check and one path check, cheap for a chain at rest); otherwise
-    a clear answer for the target (:meth:`Clearance.clear_answer`) and, when the straight way
-    to it is blocked, the next via pose of a route (:meth:`Clearance.route`), with status
-    ``PROCESSING``. The clear answer and the route are kept for the target until the chain
-    arrives, so they are searched once. When no clear answer is found the solver's own
-    solution is returned: the chain behaves as without obstacles.
+    clear straight line (measured again only when the joints could have used up the gap, so a
+    chain at rest costs a dot product); otherwise a clear answer for the target
+    (:meth:`Clearance.clear_answer`) and, when the straight way to it is blocked, the next via
+    pose of a route (:meth:`Clearance.route`), with status ``PROCESSING``. The clear answer and
+    the route are kept until the target moves, so they are searched once (a chain resting short
+    of the target for ``RELEASE_CALLS`` calls is handed back to the solver). When no clear
+    answer or no route is found, the solver's own solution is returned for that target: the
+    chain behaves as without obstacles (and a jammed one is reported blocked).
 
     >>> arm = Skeleton.chain([100.0, 100.0], base_angle=math.pi / 2)
     >>> shelf = Obstacles.from_arrays(np.array([[-50.0, 150.0, 50.0, 150.0, 0.0]]), np.empty((0, 3)))
