@@ -1,4 +1,4 @@
-"""Rigid-body dynamics of a planar serial chain, in closed form over numpy arrays.
+"""Rigid-body dynamics of a planar chain or tree of links, in closed form over numpy arrays.
 
 The controller uses it for feed-forward: the joint torques that give the motion it wants
 (inverse dynamics), the torque that gravity alone asks of each joint, and the inertia each joint
@@ -7,12 +7,16 @@ solver of the physics engine has little to converge on however long the chain is
 
 Each link is a rigid body whose centre of mass is the middle of the segment from its joint to
 the next one. Angles are radians, lengths px, masses in the level's mass unit, torques
-mass px^2/s^2, world y up. Link ``i`` hangs from joint ``i``; joint 0 sits on the base.
+mass px^2/s^2, world y up. Link ``i`` hangs from joint ``i``, which sits at the end of its parent
+link (``parents[i] < i``) or, for a root (``parents[i] == -1``), on the base; the base holds still,
+so where on it a root's joint sits changes none of the loads. A serial chain
+(``parents[i] == i - 1``) is the tree whose sums along the links are cumulative sums.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -29,30 +33,141 @@ __all__ = [
 
 @dataclass(frozen=True, eq=False)
 class ChainInertia:
-    """Mass properties of a chain's links.
+    """Mass properties of a chain's or a tree's links, and how they hang together.
 
     >>> ChainInertia(np.array([10.0]), np.array([2.0]), np.array([5.0])).count
     1
+    >>> y = ChainInertia(np.ones(3), np.ones(3), np.ones(3), parents=np.array([-1, 0, 0]))
+    >>> y.along(np.array([1.0, 2.0, 3.0])).tolist(), y.beyond(np.array([1.0, 2.0, 3.0])).tolist()
+    ([1.0, 3.0, 4.0], [6.0, 2.0, 3.0])
 
     Attributes:
         lengths: (n,) joint-to-joint length of each link, px.
         masses: (n,) mass of each link.
         moments: (n,) moment of inertia of each link about its own centre, mass px^2.
+        parents: (n,) int, the link each link's joint sits at the end of (an earlier one), or -1
+            for a link whose joint sits on the base; None (the default) for a serial chain.
     """
 
     lengths: np.ndarray
     masses: np.ndarray
     moments: np.ndarray
+    parents: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         shapes = {np.shape(a) for a in (self.lengths, self.masses, self.moments)}
         if len(shapes) != 1 or len(next(iter(shapes))) != 1:
             raise ValueError(f"lengths, masses and moments must be (n,) arrays, got {shapes}")
+        if self.parents is not None:
+            parents = np.asarray(self.parents)
+            index = np.arange(len(self.lengths))
+            if (
+                parents.shape != index.shape
+                or not np.issubdtype(parents.dtype, np.integer)
+                or np.any(parents < -1)
+                or np.any(parents >= index)
+            ):
+                raise ValueError(
+                    "parents must be (n,) ints, each -1 (on the base) or an earlier link's index, "
+                    f"got {self.parents!r}"
+                )
 
     @property
     def count(self) -> int:
         """Number of links."""
         return len(self.lengths)
+
+    @cached_property
+    def _tree(self) -> _Tree:
+        return _Tree(
+            None if self.parents is None else np.asarray(self.parents).tolist(), self.count
+        )
+
+    @property
+    def is_chain(self) -> bool:
+        """True for a serial chain: each link hangs from the one before it, the first from the
+        base."""
+        return self._tree.chain
+
+    @property
+    def parent_list(self) -> list[int]:
+        """Each link's parent index (-1 on the base), as Python ints."""
+        return self._tree.parents
+
+    def along(self, values: np.ndarray) -> np.ndarray:
+        """Per-joint ``values`` (n,) or (n, k) summed from the base out to each link: relative
+        joint rates become world angular velocities (a cumulative sum for a chain)."""
+        return self._tree.along(np.asarray(values, dtype=float))
+
+    def beyond(self, values: np.ndarray) -> np.ndarray:
+        """Per-link ``values`` (n,) or (n, k) summed over each link and everything hanging from
+        it (a reverse cumulative sum for a chain)."""
+        return self._tree.beyond(np.asarray(values, dtype=float))
+
+    @cached_property
+    def mass_beyond(self) -> np.ndarray:
+        """(n,) mass of each link and everything hanging from it."""
+        return self.beyond(self.masses)
+
+    @cached_property
+    def moment_beyond(self) -> np.ndarray:
+        """(n,) sum of the own moments of each link and everything hanging from it, mass px^2."""
+        return self.beyond(self.moments)
+
+
+class _Tree:
+    """Sums along a tree's links, as numpy cumulative sums over its runs: maximal stretches of
+    consecutive links each hanging from the one before. A chain is one run, so its sums are
+    exactly ``np.cumsum`` and its reverse; a tree's are the same additions in the same order as a
+    link-by-link loop."""
+
+    def __init__(self, parents: list[int] | None, count: int) -> None:
+        serial = list(range(-1, count - 1))
+        self.parents: list[int] = serial if parents is None else parents
+        self.chain = self.parents == serial
+        starts = [i for i in range(count) if self.parents[i] != i - 1 or i == 0]
+        self.runs = [
+            (start, stop, self.parents[start])
+            for start, stop in zip(starts, [*starts[1:], count], strict=True)
+        ]
+        # Children from the last to the first, the order a link-by-link loop adds them in.
+        hanging = [i for i in range(count - 1, -1, -1) if self.parents[i] >= 0]
+        self._children = np.array(hanging, dtype=int)
+        self._their_parents = np.array([self.parents[i] for i in hanging], dtype=int)
+
+    def along(self, values: np.ndarray) -> np.ndarray:
+        if self.chain:
+            return np.cumsum(values, axis=0)
+        out = np.empty_like(values)
+        for start, stop, parent in self.runs:
+            if parent < 0:
+                out[start:stop] = np.cumsum(values[start:stop], axis=0)
+            else:
+                # Start the run's sum from its parent's, as a link-by-link loop adds them.
+                first = values[start:stop].copy()
+                first[0] += out[parent]
+                out[start:stop] = np.cumsum(first, axis=0)
+        return out
+
+    def beyond(self, values: np.ndarray) -> np.ndarray:
+        if self.chain:
+            return np.cumsum(values[::-1], axis=0)[::-1]
+        own = values.copy()
+        out = np.empty_like(values)
+        for start, stop, parent in reversed(self.runs):
+            out[start:stop] = np.cumsum(own[start:stop][::-1], axis=0)[::-1]
+            if parent >= 0:
+                own[parent] += out[start]
+        return out
+
+    def with_children(self, values: np.ndarray) -> np.ndarray:
+        """Each link's value plus those of the links hanging from its end."""
+        out = values.copy()
+        if self.chain:
+            out[:-1] += values[1:]
+        else:
+            np.add.at(out, self._their_parents, values[self._children])
+        return out
 
 
 @dataclass(frozen=True, eq=False)
@@ -108,48 +223,45 @@ class Pose:
         (rad/s) and accelerations ``alpha`` (rad/s^2) under ``gravity`` (px/s^2); a term left
         out is zero."""
         chain = self.chain
+        tree = chain._tree
         accel = np.zeros((chain.count, 2))
         if alpha is not None:
             accel += alpha[:, None] * self.normals
         if omega is not None:
             accel -= (omega * omega)[:, None] * self.links
         # Each joint accelerates with everything before it; each centre with half its own link.
-        centre = np.cumsum(accel, axis=0) - 0.5 * accel
+        centre = tree.along(accel) - 0.5 * accel
         if gravity is not None:
             centre -= np.asarray(gravity, dtype=float)
-        forces = _reverse_cumsum(chain.masses[:, None] * centre)
-        pair = forces.copy()
-        pair[:-1] += forces[1:]
-        spin = _cross(self.halves, pair)
+        forces = tree.beyond(chain.masses[:, None] * centre)
+        spin = _cross(self.halves, tree.with_children(forces))
         if alpha is not None:
             spin += chain.moments * alpha
-        return JointLoads(_reverse_cumsum(spin), forces)
+        return JointLoads(tree.beyond(spin), forces)
 
     def inertia(self) -> np.ndarray:
         """(n,) moment of inertia about each joint of everything beyond it, held rigid,
         mass px^2: what the joint's motor turns when it moves alone."""
         chain = self.chain
-        joints = np.cumsum(self.links, axis=0) - self.links
+        tree = chain._tree
+        # Joints relative to the base, roots' offsets left out: each sum below stays within
+        # one root's links, and moves with them.
+        joints = tree.along(self.links) - self.links
         centres = joints + self.halves
         m = chain.masses
-        mass = _reverse_cumsum(m)
-        first = _reverse_cumsum(m[:, None] * centres)
-        second = _reverse_cumsum(m * np.einsum("ij,ij->i", centres, centres))
+        first = tree.beyond(m[:, None] * centres)
+        second = tree.beyond(m * np.einsum("ij,ij->i", centres, centres))
         # sum_j m_j |c_j - p_i|^2, expanded so that it is three cumulative sums.
         spread = (
             second
             - 2.0 * np.einsum("ij,ij->i", joints, first)
-            + mass * np.einsum("ij,ij->i", joints, joints)
+            + chain.mass_beyond * np.einsum("ij,ij->i", joints, joints)
         )
-        return _reverse_cumsum(chain.moments) + np.maximum(spread, 0.0)
+        return chain.moment_beyond + np.maximum(spread, 0.0)
 
 
 def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
-
-
-def _reverse_cumsum(a: np.ndarray) -> np.ndarray:
-    return np.cumsum(a[::-1], axis=0)[::-1]
 
 
 def inverse_dynamics(
@@ -163,7 +275,7 @@ def inverse_dynamics(
 
     ``world_angles``, ``omega`` and ``alpha`` are per link in the world frame (radians, rad/s,
     rad/s^2); ``gravity`` is px/s^2; the base holds still. This is the recursive Newton-Euler
-    algorithm with its two passes written as cumulative sums (:meth:`Pose.loads`).
+    algorithm with its two passes written as cumulative sums along the links (:meth:`Pose.loads`).
 
     A horizontal link of mass 2 and length 10 held still under gravity needs m g L / 2 at its
     joint:
@@ -227,7 +339,7 @@ def plan_drive(
     pose = Pose(chain, world_angles)
     wanted = np.asarray(wanted, dtype=float)
     bias = pose.loads(omega=omega, gravity=gravity)
-    return fit_drive(bias, pose.loads(alpha=np.cumsum(wanted)), wanted, max_torque)
+    return fit_drive(bias, pose.loads(alpha=chain.along(wanted)), wanted, max_torque)
 
 
 def fit_drive(

@@ -28,6 +28,7 @@ from typing import Final
 
 import numpy as np
 
+from ikgame.control._floats import FloatInertia, fit_floats
 from ikgame.control.dynamics import ChainInertia, Pose, fit_drive
 
 __all__ = ["Servo", "ServoCommand"]
@@ -42,6 +43,10 @@ STALL_SPEED: Final = 0.02
 BRAKE_FLOOR: Final = 0.1
 """Share of a joint's torque limit its braking plans on at least, even where its load leaves
 it less at the pose it is in now."""
+
+FLOAT_LINKS: Final = 40
+"""Chains (and trees) up to this many links are driven over Python floats, longer ones over
+numpy arrays: the same numbers either way, whichever is faster."""
 
 BRAKE_SHARE: Final = 0.5
 """Share of a joint's spare torque the velocity profile plans to brake with: the rest is margin
@@ -93,6 +98,9 @@ class Servo:
         self._saturated = np.zeros(count, dtype=bool)
         self._velocities = np.zeros(count)
         self._carried = np.zeros(count)
+        self._floats = FloatInertia(inertia) if inertia.count <= FLOAT_LINKS else None
+        self._limits = self.max_torque.tolist()
+        self._speeds = self.max_speed.tolist()
 
     @property
     def stalled(self) -> np.ndarray:
@@ -127,6 +135,11 @@ class Servo:
         the desired angles themselves move, when they follow a moving target: the servo moves
         with them and closes the error on top, instead of lagging behind.
         """
+        if self._floats is not None:
+            return self._command_floats(
+                self._floats, error, world_angles, velocities, gravity, dt, goal_rates
+            )
+        along = self.inertia.along
         pose = Pose(self.inertia, world_angles)
         hold = pose.loads(gravity=gravity)
         inertia = pose.inertia()
@@ -165,22 +178,22 @@ class Servo:
         moving = np.abs(closing) > 1e-9
         if np.any(moving):
             stop_in = float(np.min(2.0 * np.abs(error[moving]) / np.abs(closing[moving])))
-            halt = pose.loads(alpha=np.cumsum(-closing / stop_in)).torques
+            halt = pose.loads(alpha=along(-closing / stop_in)).torques
             closing = closing * _fit(np.abs(halt), self._room(halt, hold.torques, BRAKE_SHARE))
         target = closing if goal_rates is None else closing + goal_rates
         target = np.clip(target, -self.max_speed, self.max_speed)
         # Joints of a long chain moving at once whip its far end round: the torques that merely
         # keep those velocities grow with their square. Slow every joint by one factor until
         # they fit in the share of spare torque that braking leaves.
-        spin = pose.loads(omega=np.cumsum(target)).torques
+        spin = pose.loads(omega=along(target)).torques
         target = target * _fit(np.abs(spin), self._room(spin, hold.torques, 1.0 - BRAKE_SHARE))
         # Approach that velocity no faster than each joint's spare torque allows: a servo that
         # asked for the whole change in one tick would saturate every motor after any knock.
         wanted = np.clip(target, velocities - down * dt, velocities + up * dt)
         wanted_acceleration = (wanted - velocities) / dt
-        push = pose.loads(alpha=np.cumsum(wanted_acceleration))
+        push = pose.loads(alpha=along(wanted_acceleration))
         drive = fit_drive(
-            hold + pose.loads(omega=np.cumsum(velocities)),
+            hold + pose.loads(omega=along(velocities)),
             push,
             wanted_acceleration,
             self.max_torque,
@@ -197,6 +210,115 @@ class Servo:
             forces=drive.loads.forces,
             budgets=np.maximum(self.max_torque - np.abs(drive.loads.torques), 0.0),
         )
+
+    def _command_floats(
+        self,
+        tree: FloatInertia,
+        error: np.ndarray,
+        world_angles: np.ndarray,
+        velocities: np.ndarray,
+        gravity: tuple[float, float] | np.ndarray,
+        dt: float,
+        goal_rates: np.ndarray | None,
+    ) -> ServoCommand:
+        """:meth:`command` joint by joint over floats: the same steps, the same numbers."""
+        pose = tree.pose(world_angles)
+        limits, speeds, gain = self._limits, self._speeds, self.gain
+        errors, now = error.tolist(), velocities.tolist()
+        hold = pose.loads(gravity=(float(gravity[0]), float(gravity[1])))
+        held = hold[0]
+        inertia = pose.inertia()
+        saturated, before = self._saturated.tolist(), self._velocities.tolist()
+        carried, stalled = self._carried.tolist(), self._stalled.tolist()
+        # Each step as in command, with numpy's maximum and minimum written out (same floats).
+        up, down, closing = [], [], []
+        stop_in = math.inf
+        for j, e in enumerate(errors):
+            lim, h, i, v = limits[j], held[j], inertia[j], now[j]
+            u, d = lim - h, lim + h
+            u = (0.0 if 0.0 > u else u) / i
+            d = (0.0 if 0.0 > d else d) / i
+            up.append(u)
+            down.append(d)
+            against = d if e > 0.0 else u
+            floor = BRAKE_FLOOR * lim / i
+            brake = BRAKE_SHARE * (floor if floor > against else against)
+            slow = abs(before[j])
+            if (
+                saturated[j]
+                and v * e < 0.0
+                and abs(v) > (STALL_SPEED if STALL_SPEED > slow else slow)
+            ):
+                carried[j] += dt
+            else:
+                carried[j] = 0.0
+            stalled[j] = stalled[j] or carried[j] >= STALL_TIME
+            size = 0.0 if stalled[j] else abs(e)
+            speed, by_gain = speeds[j], gain * size
+            speed = by_gain if by_gain < speed else speed
+            by_brake = math.sqrt(2.0 * brake * size)
+            speed = by_brake if by_brake < speed else speed
+            c = _sign(e) * speed
+            closing.append(c)
+            if abs(c) > 1e-9:
+                stop = 2.0 * abs(e) / abs(c)
+                stop_in = stop if stop < stop_in else stop_in
+        self._carried = np.array(carried)
+        self._stalled = np.array(stalled)
+        self._velocities = velocities
+        if stop_in != math.inf:
+            halt = pose.loads(alpha=tree.along([-c / stop_in for c in closing]))[0]
+            factor = _fit_floats(halt, held, limits, BRAKE_SHARE)
+            closing = [c * factor for c in closing]
+        if goal_rates is not None:
+            closing = [c + g for c, g in zip(closing, goal_rates.tolist(), strict=True)]
+        target = [min(max(t, -s), s) for t, s in zip(closing, speeds, strict=True)]
+        spin = pose.loads(omega=tree.along(target))[0]
+        factor = _fit_floats(spin, held, limits, 1.0 - BRAKE_SHARE)
+        wanted = [
+            min(max(t * factor, v - d * dt), v + u * dt)
+            for t, v, d, u in zip(target, now, down, up, strict=True)
+        ]
+        accelerations = [(w - v) / dt for w, v in zip(wanted, now, strict=True)]
+        push = pose.loads(alpha=tree.along(accelerations))
+        swing = pose.loads(omega=tree.along(now))
+        bias = (
+            [a + b for a, b in zip(hold[0], swing[0], strict=True)],
+            [a + b for a, b in zip(hold[1], swing[1], strict=True)],
+            [a + b for a, b in zip(hold[2], swing[2], strict=True)],
+        )
+        reached, loads, saturated, consistent = fit_floats(bias, push, accelerations, limits)
+        if not consistent:
+            # See command: gravity and the wanted acceleration alone, pymunk's pivots the rest.
+            reached, loads, saturated, _ = fit_floats(hold, push, accelerations, limits)
+        self._saturated = np.array(saturated)
+        torques = loads[0]
+        return ServoCommand(
+            rates=np.array([v + a * dt for v, a in zip(now, reached, strict=True)]),
+            torques=np.array(torques),
+            forces=np.array((loads[1], loads[2])).T,
+            budgets=np.array(
+                [max(lim - abs(t), 0.0) for lim, t in zip(limits, torques, strict=True)]
+            ),
+        )
+
+
+def _sign(value: float) -> float:
+    """``np.sign`` of one float: 0.0 for either zero, NaN for NaN."""
+    return 1.0 if value > 0.0 else -1.0 if value < 0.0 else 0.0 if value == 0.0 else value
+
+
+def _fit_floats(loads: list[float], hold: list[float], limits: list[float], share: float) -> float:
+    """:func:`_fit` of ``loads`` within :meth:`Servo._room` over floats."""
+    factor = math.inf
+    for load, held, lim in zip(loads, hold, limits, strict=True):
+        left, floor = lim - _sign(load) * held, BRAKE_FLOOR * lim
+        room = share * (floor if floor > left else left)
+        need = abs(load)
+        if need > room:
+            ratio = room / need
+            factor = ratio if ratio < factor else factor
+    return 1.0 if factor == math.inf else math.sqrt(factor)
 
 
 def _fit(need: np.ndarray, room: np.ndarray) -> float:

@@ -1,0 +1,248 @@
+"""The chain's dynamics over Python floats, for short chains and small trees.
+
+On a few links numpy's per-call overhead costs more than the arithmetic: the servo walks them
+link by link instead. Every sum here adds the same numbers in the same order as the numpy code of
+:mod:`ikgame.control.dynamics`, so both give the same floats (tested), and which one runs
+changes nothing but the time.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ikgame.control.dynamics import ChainInertia
+
+Loads = tuple[list[float], list[float], list[float]]
+"""Joint torques, then the x and y of the pivot forces, per joint."""
+
+
+class FloatInertia:
+    """A :class:`ChainInertia` as lists of floats, with its sums along the links."""
+
+    def __init__(self, chain: ChainInertia) -> None:
+        self.count = chain.count
+        self.parents = chain.parent_list
+        self.chain = chain.is_chain
+        self.length_array = np.asarray(chain.lengths, dtype=float)
+        self.lengths: list[float] = self.length_array.tolist()
+        self.masses: list[float] = np.asarray(chain.masses, dtype=float).tolist()
+        self.moments: list[float] = np.asarray(chain.moments, dtype=float).tolist()
+        self.mass_beyond: list[float] = chain.mass_beyond.tolist()
+        self.moment_beyond: list[float] = chain.moment_beyond.tolist()
+        # (child, parent) pairs from the last child to the first: the order sums gather in.
+        self.hanging = [(i, p) for i, p in reversed(list(enumerate(self.parents))) if p >= 0]
+
+    def along(self, values: list[float]) -> list[float]:
+        """Each link's value plus all its ancestors' (``ChainInertia.along``)."""
+        if self.chain:
+            out = values[:]
+            for i in range(1, self.count):
+                out[i] = out[i - 1] + out[i]
+            return out
+        out = values[:]
+        for i, parent in enumerate(self.parents):
+            if parent >= 0:
+                out[i] = out[i] + out[parent]
+        return out
+
+    def beyond(self, values: list[float]) -> list[float]:
+        """Each link's value plus everything hanging from it (``ChainInertia.beyond``)."""
+        out = values[:]
+        for child, parent in self.hanging:
+            out[parent] = out[child] + out[parent]
+        return out
+
+    def with_children(self, values: list[float]) -> list[float]:
+        """Each link's value plus those of the links hanging from its end."""
+        out = values[:]
+        for child, parent in self.hanging:
+            out[parent] = out[parent] + values[child]
+        return out
+
+    def pose(self, world_angles: np.ndarray) -> FloatPose:
+        """The geometry at ``world_angles`` (n,) radians."""
+        return FloatPose(self, world_angles)
+
+
+class FloatPose:
+    """:class:`~ikgame.control.dynamics.Pose` over lists: loads and inertia at one instant."""
+
+    def __init__(self, inertia: FloatInertia, world_angles: np.ndarray) -> None:
+        self.inertia_of = inertia
+        lx = inertia.length_array * np.cos(world_angles)
+        ly = inertia.length_array * np.sin(world_angles)
+        self.lx: list[float] = lx.tolist()
+        self.ly: list[float] = ly.tolist()
+        self.hx: list[float] = (0.5 * lx).tolist()
+        self.hy: list[float] = (0.5 * ly).tolist()
+
+    def loads(
+        self,
+        omega: list[float] | None = None,
+        alpha: list[float] | None = None,
+        gravity: tuple[float, float] | None = None,
+    ) -> Loads:
+        """:meth:`Pose.loads <ikgame.control.dynamics.Pose.loads>` over lists."""
+        tree = self.inertia_of
+        if tree.chain:
+            return self._chain_loads(omega, alpha, gravity)
+        n = tree.count
+        if alpha is not None:
+            ax = [0.0 + a * -y for a, y in zip(alpha, self.ly, strict=True)]
+            ay = [0.0 + a * x for a, x in zip(alpha, self.lx, strict=True)]
+        else:
+            ax, ay = [0.0] * n, [0.0] * n
+        if omega is not None:
+            ax = [a - w * w * x for a, w, x in zip(ax, omega, self.lx, strict=True)]
+            ay = [a - w * w * y for a, w, y in zip(ay, omega, self.ly, strict=True)]
+        jx, jy = tree.along(ax), tree.along(ay)
+        gx, gy = (0.0, 0.0) if gravity is None else gravity
+        masses = tree.masses
+        if gravity is None:
+            fx = [m * (j - 0.5 * a) for m, j, a in zip(masses, jx, ax, strict=True)]
+            fy = [m * (j - 0.5 * a) for m, j, a in zip(masses, jy, ay, strict=True)]
+        else:
+            fx = [m * (j - 0.5 * a - gx) for m, j, a in zip(masses, jx, ax, strict=True)]
+            fy = [m * (j - 0.5 * a - gy) for m, j, a in zip(masses, jy, ay, strict=True)]
+        fx, fy = tree.beyond(fx), tree.beyond(fy)
+        px, py = tree.with_children(fx), tree.with_children(fy)
+        spin = [hx * qy - hy * qx for hx, hy, qx, qy in zip(self.hx, self.hy, px, py, strict=True)]
+        if alpha is not None:
+            spin = [s + i * a for s, i, a in zip(spin, tree.moments, alpha, strict=True)]
+        return tree.beyond(spin), fx, fy
+
+    def _chain_loads(
+        self,
+        omega: list[float] | None,
+        alpha: list[float] | None,
+        gravity: tuple[float, float] | None,
+    ) -> Loads:
+        """:meth:`loads` of a serial chain in one pass out and one back. Sums start from -0.0,
+        which adds nothing to any float (0.0 would turn a -0.0 into 0.0), so each adds exactly
+        what ``np.cumsum`` does."""
+        tree = self.inertia_of
+        n = tree.count
+        lx, ly = self.lx, self.ly
+        gx, gy = (0.0, 0.0) if gravity is None else gravity
+        ax, ay = [0.0] * n, [0.0] * n
+        if alpha is not None:
+            ax = [0.0 + a * -y for a, y in zip(alpha, ly, strict=True)]
+            ay = [0.0 + a * x for a, x in zip(alpha, lx, strict=True)]
+        if omega is not None:
+            ax = [a - w * w * x for a, w, x in zip(ax, omega, lx, strict=True)]
+            ay = [a - w * w * y for a, w, y in zip(ay, omega, ly, strict=True)]
+        masses = tree.masses
+        own_x, own_y = [0.0] * n, [0.0] * n
+        jx = jy = -0.0
+        for i in range(n):
+            x, y = ax[i], ay[i]
+            jx += x
+            jy += y
+            # Each joint accelerates with everything before it; each centre with half its link.
+            if gravity is None:
+                own_x[i] = masses[i] * (jx - 0.5 * x)
+                own_y[i] = masses[i] * (jy - 0.5 * y)
+            else:
+                own_x[i] = masses[i] * (jx - 0.5 * x - gx)
+                own_y[i] = masses[i] * (jy - 0.5 * y - gy)
+        hx, hy, moments = self.hx, self.hy, tree.moments
+        fx, fy, torques = [0.0] * n, [0.0] * n, [0.0] * n
+        sx = sy = torque = beyond_x = beyond_y = -0.0
+        for i in range(n - 1, -1, -1):
+            sx += own_x[i]
+            sy += own_y[i]
+            spin = hx[i] * (sy + beyond_y) - hy[i] * (sx + beyond_x)
+            if alpha is not None:
+                spin += moments[i] * alpha[i]
+            torque += spin
+            fx[i], fy[i], torques[i] = sx, sy, torque
+            beyond_x, beyond_y = sx, sy
+        return torques, fx, fy
+
+    def inertia(self) -> list[float]:
+        """:meth:`Pose.inertia <ikgame.control.dynamics.Pose.inertia>` over lists."""
+        tree = self.inertia_of
+        if tree.chain:
+            return self._chain_inertia()
+        jx = [a - x for a, x in zip(tree.along(self.lx), self.lx, strict=True)]
+        jy = [a - y for a, y in zip(tree.along(self.ly), self.ly, strict=True)]
+        cx = [j + h for j, h in zip(jx, self.hx, strict=True)]
+        cy = [j + h for j, h in zip(jy, self.hy, strict=True)]
+        masses = tree.masses
+        first_x = tree.beyond([m * c for m, c in zip(masses, cx, strict=True)])
+        first_y = tree.beyond([m * c for m, c in zip(masses, cy, strict=True)])
+        second = tree.beyond([m * (x * x + y * y) for m, x, y in zip(masses, cx, cy, strict=True)])
+        return [
+            b + max(s - 2.0 * (x * fx + y * fy) + mass * (x * x + y * y), 0.0)
+            for b, s, x, y, fx, fy, mass in zip(
+                tree.moment_beyond, second, jx, jy, first_x, first_y, tree.mass_beyond, strict=True
+            )
+        ]
+
+    def _chain_inertia(self) -> list[float]:
+        """:meth:`inertia` of a serial chain in one pass out and one back."""
+        tree = self.inertia_of
+        n = tree.count
+        lx, ly, hx, hy, masses = self.lx, self.ly, self.hx, self.hy, tree.masses
+        jx, jy, mcx, mcy, mcc = [0.0] * n, [0.0] * n, [0.0] * n, [0.0] * n, [0.0] * n
+        ex = ey = -0.0
+        for i in range(n):
+            ex += lx[i]
+            ey += ly[i]
+            x, y, m = ex - lx[i], ey - ly[i], masses[i]
+            jx[i], jy[i] = x, y
+            cx, cy = x + hx[i], y + hy[i]
+            mcx[i], mcy[i], mcc[i] = m * cx, m * cy, m * (cx * cx + cy * cy)
+        out = [0.0] * n
+        first_x = first_y = second = -0.0
+        mass_beyond, moment_beyond = tree.mass_beyond, tree.moment_beyond
+        for i in range(n - 1, -1, -1):
+            first_x += mcx[i]
+            first_y += mcy[i]
+            second += mcc[i]
+            x, y = jx[i], jy[i]
+            spread = second - 2.0 * (x * first_x + y * first_y) + mass_beyond[i] * (x * x + y * y)
+            out[i] = moment_beyond[i] + (0.0 if 0.0 > spread else spread)
+        return out
+
+
+def fit_floats(
+    bias: Loads, push: Loads, wanted: list[float], limits: list[float]
+) -> tuple[list[float], Loads, list[bool], bool]:
+    """:func:`~ikgame.control.dynamics.fit_drive` over lists: the accelerations, the loads,
+    which joints are saturated, and whether the loads are those of the motion."""
+    bt, bx, by = bias
+    st, sx, sy = push
+    full_t = [b + s for b, s in zip(bt, st, strict=True)]
+    if all(abs(t) <= lim for t, lim in zip(full_t, limits, strict=True)):
+        full = (
+            full_t,
+            [b + s for b, s in zip(bx, sx, strict=True)],
+            [b + s for b, s in zip(by, sy, strict=True)],
+        )
+        return wanted, full, [False] * len(limits), True
+    low, high, holds = -math.inf, math.inf, True
+    for b, s, lim in zip(bt, st, limits, strict=True):
+        if s != 0.0:
+            to_upper, to_lower = (lim - b) / s, (-lim - b) / s
+            low = max(low, min(to_upper, to_lower))
+            high = min(high, max(to_upper, to_lower))
+        elif not abs(b) <= lim:
+            holds = False
+    # The largest factor up to 1 that every joint allows, as in fit_drive.
+    if holds and low <= high and low <= 1.0 and high >= 0.0:
+        scale = min(1.0, high)
+        accelerations = [scale * w for w in wanted]
+        loads = (
+            [b + scale * s for b, s in zip(bt, st, strict=True)],
+            [b + scale * s for b, s in zip(bx, sx, strict=True)],
+            [b + scale * s for b, s in zip(by, sy, strict=True)],
+        )
+        consistent = True
+    else:
+        accelerations, consistent = wanted, False
+        loads = ([min(max(b, -lim), lim) for b, lim in zip(bt, limits, strict=True)], bx, by)
+    saturated = [abs(t) >= lim * (1.0 - 1e-9) for t, lim in zip(loads[0], limits, strict=True)]
+    return accelerations, loads, saturated, consistent
