@@ -24,7 +24,7 @@ from ikgame.control.controller import Controller
 from ikgame.control.dynamics import ChainInertia
 from ikgame.control.gait import Footing, Gait, GaitParams, Terrain
 from ikgame.control.servo import Servo
-from ikgame.kinematics import SolveStatus, TargetSet
+from ikgame.kinematics import Avoider, Clearance, Obstacles, SolveStatus, TargetSet
 from ikgame.level.model import (
     CHAIN_EFFECTOR,
     MAX_COORD,
@@ -208,6 +208,7 @@ class Simulation:
         )
         self._result: RunResult | None = None
         self.scene = _scene(level, self.world, self.script)
+        self.controller.avoider = _avoider(self.world, self.scene)
         self._has_goals = bool(level.goals)
         self._watch = BlockWatch(dt=self.dt, arrival=level.chain.arrival)
         self._blocked_target: np.ndarray | TargetSet | None = None
@@ -635,6 +636,17 @@ def _grown(segments: np.ndarray, circles: np.ndarray, by: float) -> tuple[np.nda
     grown_segments[:, 4] += by
     grown_circles[:, 2] += by
     return grown_segments, grown_circles
+
+
+def _avoider(world: World, scene: Scene) -> Avoider | None:
+    """What keeps the chain clear of the level's static obstacles (None without any, and for
+    a tree: the clearance works on chains)."""
+    if not world.skeleton.is_chain:
+        return None
+    obstacles = Obstacles.from_arrays(scene.segments, scene.circles)
+    if not len(obstacles):
+        return None
+    return Avoider(Clearance(world.skeleton, world.link_widths / 2.0, obstacles))
 
 
 def _scene(level: Level, world: World, script: ScriptRunner) -> Scene:

@@ -30,6 +30,7 @@ from ikgame.kinematics import (
     stacked_jacobian,
     wrap_angle,
 )
+from ikgame.kinematics.clearance import Avoider
 from ikgame.kinematics.jacobian import jacobian
 
 __all__ = ["Command", "Controller", "joint_error"]
@@ -87,11 +88,14 @@ class Controller:
         iterations: int = 10,
         arrival: float = 0.5,
         servo: Servo | None = None,
+        avoider: Avoider | None = None,
     ) -> None:
         # Stalls (limits, coils, the long way round a stop) are recovered from, and a settled
         # chain's answer is cached, by one solver object that lives with the chain.
         self.solver = RobustSolver(skeleton, solver)
         """The chain's solver, with recovery and a cache (see :class:`RobustSolver`)."""
+        self.avoider = avoider
+        """Keeps the commanded poses and the way to them clear of static obstacles, if set."""
         self.skeleton = skeleton
         self.max_speed = np.asarray(max_speed, dtype=float)
         self.servo = servo
@@ -127,6 +131,8 @@ class Controller:
         self.solver.skeleton = skeleton
         # The damping of the target's pseudo-inverse (see _goal_rates), px^2, per chain.
         self._damping = (0.01 * skeleton.reach) ** 2
+        if self.avoider is not None:
+            self.avoider.clearance.skeleton = skeleton
 
     @property
     def solver_name(self) -> str:
@@ -210,6 +216,8 @@ class Controller:
         self._holding = True
         # A cached answer is one the chain could not get to: solve afresh when released.
         self.solver.reset()
+        if self.avoider is not None:
+            self.avoider.reset()
 
     def release(self) -> None:
         """Solve toward the target again after :meth:`hold`."""
@@ -252,6 +260,8 @@ class Controller:
                 self.solver.solve_targets if isinstance(target, TargetSet) else self.solver.solve
             )
             solution = solve(start, target, max_iterations=self.iterations, tolerance=self.arrival)
+            if self.avoider is not None and not isinstance(target, TargetSet):
+                solution = self.avoider.steer(start, solution, target, self.arrival)
             self._held = solution.angles
         error = joint_error(solution.angles, measured, self._limited)
         if self.servo is None:

@@ -5,6 +5,7 @@ here, the function would hide the module of the same name.
 """
 
 from ikgame.kinematics.ccd import CCDResult, ccd_iteration, solve_ccd, wrap_angle
+from ikgame.kinematics.clearance import Avoider, Clearance, Obstacles
 from ikgame.kinematics.fabrik import solve_fabrik
 from ikgame.kinematics.jacobian import solve_dls, solve_jacobian_transpose
 from ikgame.kinematics.multi_ccd import solve_ccd_targets
@@ -17,8 +18,11 @@ from ikgame.kinematics.solver import Solution, Solver, SolveStatus, TargetSolver
 from ikgame.kinematics.targets import TargetSet, stacked_jacobian
 
 __all__ = [
+    "Avoider",
     "CCDResult",
+    "Clearance",
     "RobustSolver",
+    "Obstacles",
     "SOLVERS",
     "Skeleton",
     "Solution",

@@ -106,15 +106,15 @@ def test_props_fall_onto_obstacles_and_reach_the_snapshots_and_the_scene():
     assert final[1, 1] == pytest.approx(-16.0 + 10.0, abs=0.5)
 
 
-def test_the_chain_pushes_a_prop_and_says_when_the_floor_jams_it():
-    def sweep(base_height):
+def test_the_chain_pushes_a_prop_goes_clear_of_the_floor_and_says_when_a_wall_jams_it():
+    def sweep(base_height, obstacles=FLOOR):
         level = _level(
             [
                 {"sequence": [[80.0, 120.0], [90.0, 15.0]], "tolerance": 10.0, "hold": 0.2},
                 {"reach": [280.0, 15.0], "timeout": 2.0},
             ],
             props=[{"kind": "ball", "name": "ball", "position": [150.0, 0.0], "radius": 15.0}],
-            obstacles=FLOOR,
+            obstacles=obstacles,
             world={"gravity": [0.0, -900.0]},
             chain={"base": [0.0, base_height]},
         )
@@ -124,9 +124,13 @@ def test_the_chain_pushes_a_prop_and_says_when_the_floor_jams_it():
 
     # Mounted 50 px up, the arm sweeps along the floor and knocks the ball on.
     assert sweep(50.0).world.prop_states()[0, 0] > 200.0
-    # Mounted on the floor, unfolding toward the far target presses the tip into the floor,
-    # where friction holds it: the chain stops pushing and says so.
-    jammed = sweep(0.0).result.steps[-1]
+    # Mounted on the floor, the arm unfolds toward the far target on a way clear of the floor
+    # (the straight unfolding pressed its tip into the floor, where friction held it).
+    clear = sweep(0.0).result.steps[-1]
+    assert clear.passed and "blocked" not in clear.note
+    # A wall taller than the arm leaves no clear pose: the chain presses on it, and says so.
+    wall = [*FLOOR, {"kind": "segment", "a": [200.0, -20.0], "b": [200.0, 400.0]}]
+    jammed = sweep(0.0, wall).result.steps[-1]
     assert not jammed.passed and "blocked" in jammed.note
 
 

@@ -1,0 +1,632 @@
+"""Keeping a chain clear of static obstacles: distances, clear answers, clear paths.
+
+The raw solvers know only the target. In a world with a shelf or a floor their answer can put a
+link through an obstacle, and even a clear answer can be out of the chain's way when the motors
+turn the joints toward it through the obstacle. :class:`Clearance` knows the obstacles, as plain
+arrays, and the chain's links, each a capsule (a segment with a radius, half the link's width):
+
+- **gaps** (:meth:`Clearance.gaps`): each link's smallest distance to any obstacle's surface
+  (negative when they overlap), and the same for a batch of poses at once.
+- **a clear answer** (:meth:`Clearance.polish`): damped least squares on the end effector's error
+  with one extra row per link closer than ``ACTIVE`` to an obstacle, asking that gap not to
+  shrink, or to grow back to ``MARGIN`` (the rows of an inequality, active only near contact).
+  :meth:`Clearance.clear_answer` polishes a set of seeds (the measured pose, the straight answer,
+  the answer with its bends reversed, poses curled either way, ``RANDOM_SEEDS`` random poses
+  within the limits) and keeps the clear one that arrives nearest the measured pose, preferring
+  one the chain can turn to in a straight line.
+- **a clear path** (:meth:`Clearance.route`): the motors turn every joint toward its goal
+  together, so the chain moves close to the straight line in joint space. When that line sweeps
+  through an obstacle (checked at poses no point of the chain moves more than ``PATH_STEP``
+  between), a bidirectional random tree in joint space (RRT-connect, seeded, at most
+  ``ROUTE_NODES`` nodes) finds a chain of clear straight pieces, shortened greedily; the chain
+  is steered through these via poses one after the other.
+
+:class:`Avoider` does this tick by tick for a controller: it takes the solver's answer and
+returns the pose to command, keeping the clear answer and the route for the target until it
+moves, so they are searched once; a chain at rest or in the open costs a dot product a tick.
+While the base moves it plans nothing (a plan would be stale by the next tick). Chains only.
+Angles are radians, distances px.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Final
+
+import numpy as np
+
+from ikgame.kinematics.recovery import SETTLED
+from ikgame.kinematics.skeleton import Skeleton
+from ikgame.kinematics.solver import Solution, SolveStatus
+
+__all__ = [
+    "ACTIVE",
+    "MARGIN",
+    "PATH_STEP",
+    "ROUTE_NODES",
+    "RANDOM_SEEDS",
+    "Avoider",
+    "Clearance",
+    "Obstacles",
+]
+
+MARGIN: Final = 4.0
+"""Gap a polished answer keeps between a link's surface and an obstacle's, px."""
+
+ACTIVE: Final = 6.0
+"""A link closer than this to an obstacle gets a clearance row in the polish, px."""
+
+PATH_STEP: Final = 2.0
+"""Most any point of the chain moves between two poses checked along a path, px: as paths keep
+half of ``MARGIN`` clear at the poses checked, no link touches in between."""
+
+ROUTE_NODES: Final = 1500
+"""Most poses a route search adds to its two trees before it gives up."""
+
+RANDOM_SEEDS: Final = 12
+"""Random poses (within the limits) polished after the deliberate seeds of a clear answer."""
+
+RANDOM_SEED: Final = 7193
+"""Seed of the generators of random seeds and route samples: the same inputs give the same
+answers."""
+
+POLISH_ITERATIONS: Final = 80
+"""Iterations one seed of a clear answer is polished for."""
+
+STALE_ITERATIONS: Final = 12
+"""A polish that has not improved on its best pose for this many iterations stops there."""
+
+ROUTE_STEP: Final = 0.3
+"""Largest joint change of one edge of a route tree, radians."""
+
+AHEAD: Final = 40.0
+"""A chain whose sweep to its via pose is at most this (px) may head for the next one."""
+
+RELEASE_CALLS: Final = 120
+"""Calls at rest on a clear goal after which the solver answers again even short of the target
+(half a second at 240 ticks/s)."""
+
+_MAX_STEP: Final = 0.2
+_MAX_SAMPLES: Final = 400
+
+
+@dataclass(frozen=True, eq=False)
+class Obstacles:
+    """Static obstacles as capsules: (k, 5) rows ``(ax, ay, bx, by, radius)``, px.
+
+    A disc is a capsule whose two ends coincide. Build from a level's arrays with
+    :meth:`from_arrays`.
+
+    >>> obs = Obstacles.from_arrays(np.array([[0.0, 0.0, 10.0, 0.0, 1.0]]), np.array([[5, 5, 2]]))
+    >>> obs.capsules.tolist()
+    [[0.0, 0.0, 10.0, 0.0, 1.0], [5.0, 5.0, 5.0, 5.0, 2.0]]
+    """
+
+    capsules: np.ndarray
+
+    def __post_init__(self) -> None:
+        capsules = np.array(self.capsules, dtype=float).reshape(-1, 5)
+        if not np.all(np.isfinite(capsules)) or np.any(capsules[:, 4] < 0):
+            raise ValueError("obstacles must be finite, with radii >= 0 px")
+        capsules.setflags(write=False)
+        object.__setattr__(self, "capsules", capsules)
+
+    @classmethod
+    def from_arrays(cls, segments: np.ndarray, circles: np.ndarray) -> Obstacles:
+        """Segments (k, 5) ``(ax, ay, bx, by, radius)`` and circles (m, 3) ``(x, y, radius)``."""
+        seg = np.asarray(segments, dtype=float)
+        disc = np.asarray(circles, dtype=float)
+        if seg.size and (seg.ndim != 2 or seg.shape[1] != 5):
+            raise ValueError(f"segments must have shape (k, 5), got {seg.shape}")
+        if disc.size and (disc.ndim != 2 or disc.shape[1] != 3):
+            raise ValueError(f"circles must have shape (m, 3), got {disc.shape}")
+        disc = disc.reshape(-1, 3)
+        as_capsules = np.column_stack((disc[:, :2], disc[:, :2], disc[:, 2]))
+        return cls(np.vstack((seg.reshape(-1, 5), as_capsules)))
+
+    def __len__(self) -> int:
+        return int(self.capsules.shape[0])
+
+
+class Clearance:
+    """Distances from one chain's links (capsules of ``radii``, px) to static ``obstacles``.
+
+    Set :attr:`skeleton` when the base moves.
+
+    >>> arm = Skeleton.chain([100.0, 100.0], base_angle=math.pi / 2)
+    >>> shelf = Obstacles.from_arrays(np.array([[-50.0, 150.0, 50.0, 150.0, 0.0]]), np.empty((0, 3)))
+    >>> room = Clearance(arm, np.full(2, 5.0), shelf)
+    >>> room.gaps(np.zeros(2)).tolist()  # the upper link runs through the shelf
+    [45.0, -55.0]
+    >>> room.is_clear(room.polish(np.zeros(2), np.array([120.0, 60.0])).angles)
+    True
+    """
+
+    def __init__(
+        self, skeleton: Skeleton, radii: np.ndarray, obstacles: Obstacles, *, margin: float = MARGIN
+    ) -> None:
+        if not skeleton.is_chain:
+            raise ValueError("clearance is computed for chains")
+        radii = np.asarray(radii, dtype=float)
+        if radii.shape != (skeleton.count,) or not np.all(np.isfinite(radii)) or np.any(radii < 0):
+            raise ValueError(f"radii must be ({skeleton.count},) finite px >= 0")
+        if not (math.isfinite(margin) and margin >= 0):
+            raise ValueError(f"margin must be a finite number of px >= 0, got {margin!r}")
+        self.skeleton = skeleton
+        self.radii = radii
+        self.obstacles = obstacles
+        self.margin = float(margin)
+        caps = obstacles.capsules
+        self._a = caps[:, :2]
+        self._b = caps[:, 2:4]
+        self._r = caps[:, 4]
+        # How far each point of link i can be from joint j <= i: the step bound of path checks.
+        lengths = skeleton.lengths
+        self._lever = np.cumsum(lengths[::-1])[::-1]
+
+    # -- distances ---------------------------------------------------------------------------
+
+    def points(self, poses: np.ndarray) -> np.ndarray:
+        """(..., n + 1, 2) joints then the end effector for (..., n) poses, px."""
+        sk = self.skeleton
+        world = np.cumsum(poses, axis=-1) + sk.base_angle
+        steps = sk.lengths[:, None] * np.stack((np.cos(world), np.sin(world)), axis=-1)
+        joints = np.concatenate(
+            (np.broadcast_to(sk.base, (*poses.shape[:-1], 1, 2)), steps), axis=-2
+        )
+        return np.cumsum(joints, axis=-2)
+
+    def _pairs(self, pts: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Signed gaps (..., n, k), the point on each link nearest the obstacle (..., n, k, 2)
+        and the unit direction that widens the gap when that point moves along it."""
+        p0 = pts[..., :-1, None, :]
+        p1 = pts[..., 1:, None, :]
+        q0, q1 = self._a, self._b
+        # Candidates: each link end against the obstacle, each obstacle end against the link.
+        c0 = _nearest_on(p0, q0, q1)
+        c1 = _nearest_on(p1, q0, q1)
+        c2 = _nearest_on(q0, p0, p1)
+        c3 = _nearest_on(q1, p0, p1)
+        on_link = np.stack(np.broadcast_arrays(p0, p1, c2, c3))
+        on_obstacle = np.stack(np.broadcast_arrays(c0, c1, q0 + 0 * p0, q1 + 0 * p0))
+        offset = on_link - on_obstacle
+        dist = np.hypot(offset[..., 0], offset[..., 1])
+        pick = np.argmin(dist, axis=0)
+        d = np.take_along_axis(dist, pick[None], axis=0)[0]
+        off = np.take_along_axis(offset, pick[None, ..., None], axis=0)[0]
+        point = np.take_along_axis(on_link, pick[None, ..., None], axis=0)[0]
+        unit = off / np.maximum(d, 1e-9)[..., None]
+        crossing = _crossing(p0[..., 0, :], p1[..., 0, :], q0, q1)
+        # A link through a thin obstacle: the way out is back the shortest way it came in.
+        sign = np.where(crossing, -1.0, 1.0)
+        radii = self.radii[:, None] + self._r
+        return sign * d - radii, point, sign[..., None] * unit
+
+    def _gaps(self, pts: np.ndarray) -> np.ndarray:
+        """Signed gaps (..., n, k) between links and obstacles, without the directions."""
+        q0, q1 = self._a, self._b
+        joints = _distance_to(pts[..., :, None, :], q0, q1)  # (..., n + 1, k)
+        ends = np.stack((q0, q1))[:, None, :]  # (2, 1, k, 2)
+        p0 = pts[..., None, :-1, None, :]
+        p1 = pts[..., None, 1:, None, :]
+        tips = _distance_to(ends, p0, p1).min(axis=-3)  # (..., n, k)
+        d = np.minimum(np.minimum(joints[..., :-1, :], joints[..., 1:, :]), tips)
+        crossing = _crossing(pts[..., :-1, :], pts[..., 1:, :], q0, q1)
+        return np.where(crossing, -d, d) - (self.radii[:, None] + self._r)
+
+    def gaps(self, angles: np.ndarray) -> np.ndarray:
+        """(n,) each link's smallest gap to any obstacle, px (inf with none; < 0 overlapping)."""
+        if not len(self.obstacles):
+            return np.full(self.skeleton.count, math.inf)
+        return self._gaps(self.points(np.asarray(angles, dtype=float))).min(axis=-1)
+
+    def smallest_gaps(self, poses: np.ndarray) -> np.ndarray:
+        """(b,) the smallest gap of each of (b, n) poses over every link and obstacle, px."""
+        if not len(self.obstacles):
+            return np.full(len(poses), math.inf)
+        return self._gaps(self.points(poses)).min(axis=(-1, -2))
+
+    def swept(self, a: np.ndarray, b: np.ndarray) -> float:
+        """Farthest any point of the chain can move on the straight line from pose ``a`` to
+        ``b``, px: a bound, so a pose ``swept`` px clear at ``a`` stays clear all the way."""
+        return float(np.abs(b - a) @ self._lever)
+
+    def is_clear(self, angles: np.ndarray, floor: float = 0.0) -> bool:
+        """True when no link comes closer than ``floor`` px to an obstacle."""
+        return bool(self.gaps(angles).min() >= floor)
+
+    # -- answers -----------------------------------------------------------------------------
+
+    def polish(
+        self,
+        angles: np.ndarray,
+        target: np.ndarray,
+        *,
+        iterations: int = POLISH_ITERATIONS,
+        tolerance: float = 0.5,
+    ) -> Solution:
+        """Damped least squares toward ``target`` that keeps every link ``margin`` px clear.
+
+        Returns the best pose seen: clear first, then nearest the target (it stops after
+        ``STALE_ITERATIONS`` without a better one). ``SUCCESS`` when it is clear and within
+        ``tolerance``, else ``PROCESSING``.
+        """
+        sk = self.skeleton
+        pose = sk.clamp(np.asarray(angles, dtype=float).copy())
+        target = np.asarray(target, dtype=float)
+        n = sk.count
+        below = np.tril(np.ones((n, n), dtype=bool))  # below[i, j]: joint j moves link i
+        best, best_key, stale = pose, (math.inf, math.inf), 0
+        damping = (0.02 * self._lever[0]) ** 2
+        for _ in range(iterations):
+            pts = self.points(pose)
+            error = target - pts[-1]
+            if len(self.obstacles):
+                gap, point, unit = self._pairs(pts)
+            else:
+                gap = np.full((n, 0), math.inf)
+            dist = float(np.hypot(*error))
+            key = (max(0.0, -float(gap.min(initial=math.inf))), dist)
+            if key < best_key:
+                best, best_key, stale = pose.copy(), key, 0
+            else:
+                stale += 1
+                if stale > STALE_ITERATIONS:
+                    break
+            if key[0] == 0.0 and dist <= tolerance and gap.min(initial=math.inf) >= self.margin:
+                break
+            arms = pts[-1] - pts[:-1]
+            rows = [np.vstack((-arms[:, 1], arms[:, 0]))]
+            wanted = [error]
+            links, obstacles = np.nonzero(gap < self.margin + ACTIVE)
+            if links.size:
+                p = point[links, obstacles]
+                u = unit[links, obstacles]
+                lever = p[:, None, :] - pts[None, :-1, :]
+                moved = -lever[..., 1] * u[:, None, 0] + lever[..., 0] * u[:, None, 1]
+                rows.append(np.where(below[links], moved, 0.0))
+                wanted.append(np.maximum(self.margin - gap[links, obstacles], 0.0))
+            jac = np.vstack(rows)
+            err = np.concatenate(wanted)
+            step = jac.T @ np.linalg.solve(jac @ jac.T + damping * np.eye(len(err)), err)
+            largest = float(np.abs(step).max())
+            if largest > _MAX_STEP:
+                step *= _MAX_STEP / largest
+            pose = sk.clamp(pose + step)
+        status = SolveStatus.SUCCESS
+        if best_key[0] > 0.0 or best_key[1] > tolerance:
+            status = SolveStatus.PROCESSING
+        return Solution(best, status, iterations, best_key[1])
+
+    def seeds(self, measured: np.ndarray, answer: np.ndarray) -> list[np.ndarray]:
+        """Starts for :meth:`clear_answer`: the measured pose, the answer, the answer with its
+        bends reversed, the chain curled evenly either way, then random poses within the
+        limits (seeded)."""
+        sk = self.skeleton
+        n = sk.count
+        reversed_bends = -answer
+        reversed_bends[0] = answer[0]
+        low = np.maximum(sk.lower, -math.pi)
+        high = np.minimum(sk.upper, math.pi)
+        curl = math.pi / max(n, 2)
+        starts = [measured, answer, reversed_bends, np.full(n, curl), np.full(n, -curl)]
+        rng = np.random.default_rng(RANDOM_SEED)
+        starts.extend(rng.uniform(low, high, (RANDOM_SEEDS, n)))
+        return [sk.clamp(np.asarray(s, dtype=float)) for s in starts]
+
+    def clear_answer(
+        self, measured: np.ndarray, answer: np.ndarray, target: np.ndarray, tolerance: float
+    ) -> np.ndarray | None:
+        """A clear pose within ``tolerance`` of ``target``, or None if no seed found one.
+
+        Among the seeds' polished poses, the first the chain can turn to in a straight clear
+        line wins; otherwise the clear one nearest ``measured`` in joint space.
+        """
+        found: list[np.ndarray] = []
+        for start in self.seeds(np.asarray(measured, float), np.asarray(answer, float)):
+            sol = self.polish(start, target, tolerance=tolerance)
+            if sol.status is not SolveStatus.SUCCESS:
+                continue
+            if self.path_clear(measured, sol.angles):
+                return sol.angles
+            found.append(sol.angles)
+        if not found:
+            return None
+        return min(found, key=lambda pose: float(np.abs(pose - measured).sum()))
+
+    # -- paths -------------------------------------------------------------------------------
+
+    def _samples(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """Poses along the straight line from ``a`` to ``b`` (both ends included), spaced so
+        that no point of the chain moves more than ``PATH_STEP`` px between two."""
+        swept = self.swept(a, b)
+        count = min(_MAX_SAMPLES, max(2, math.ceil(swept / PATH_STEP) + 1))
+        fractions = np.linspace(0.0, 1.0, count)[:, None]
+        return a + fractions * (b - a)
+
+    def path_gaps(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """The smallest gap (px) of each pose along the straight joint-space line from ``a`` to
+        ``b``, ``a`` first and ``b`` last, at poses no point moves ``PATH_STEP`` px between."""
+        return self.smallest_gaps(self._samples(np.asarray(a, float), np.asarray(b, float)))
+
+    def path_clear(self, a: np.ndarray, b: np.ndarray) -> bool:
+        """Whether the straight joint-space line from ``a`` to ``b`` keeps every link half the
+        margin clear (the motors do not follow the line exactly, and a link rubbing along an
+        obstacle drags). A start already closer than that may only get farther."""
+        if not len(self.obstacles):
+            return True
+        return _clear_along(self.path_gaps(a, b), self.margin / 2.0)
+
+    def route(self, start: np.ndarray, goal: np.ndarray) -> list[np.ndarray] | None:
+        """Via poses from ``start`` to the clear ``goal`` (the goal last), each reached from the
+        one before in a clear straight line; None when the search found none.
+
+        >>> arm = Skeleton.chain([100.0, 100.0], base_angle=math.pi / 2)
+        >>> post = Obstacles.from_arrays(np.empty((0, 5)), np.array([[0.0, 185.0, 20.0]]))
+        >>> room = Clearance(arm, np.full(2, 5.0), post)
+        >>> start, goal = np.array([0.8, 0.8]), np.array([-0.8, -0.8])
+        >>> room.path_clear(start, goal)
+        False
+        >>> way = room.route(start, goal)
+        >>> all(room.path_clear(a, b) for a, b in zip([start, *way], way))
+        True
+        """
+        start = np.asarray(start, float)
+        goal = np.asarray(goal, float)
+        if self.path_clear(start, goal):
+            return [goal]
+        found = self._connect(start, goal)
+        if found is None:
+            return None
+        # Greedy shortcuts: from each pose, the farthest one reachable in a clear straight line.
+        way: list[np.ndarray] = []
+        here, index = start, 0
+        while index < len(found):
+            far = len(found) - 1
+            while far > index and not self.path_clear(here, found[far]):
+                far -= 1
+            here, index = found[far], far + 1
+            way.append(here)
+        return way
+
+    def _connect(self, start: np.ndarray, goal: np.ndarray) -> list[np.ndarray] | None:
+        """RRT-connect in joint space: the poses from ``start`` (excluded) to ``goal``."""
+        sk = self.skeleton
+        rng = np.random.default_rng(RANDOM_SEED)
+        low = np.maximum(sk.lower, start - math.pi)
+        high = np.minimum(sk.upper, start + math.pi)
+        trees: list[tuple[list[np.ndarray], list[int]]] = [([start], [-1]), ([goal], [-1])]
+        from_start = trees[0]
+        for _ in range(ROUTE_NODES):
+            grow, other = trees
+            sample = rng.uniform(low, high)
+            new, _ = self._extend(grow, sample, reach=True)
+            if new is not None:
+                reached, arrived = self._extend(other, grow[0][new], reach=True)
+                if arrived:
+                    a = _lineage(grow, new)
+                    b = _lineage(other, reached)
+                    path = a + b[::-1] if grow is from_start else b + a[::-1]
+                    return path[1:]
+            trees.reverse()
+        return None
+
+    def _extend(
+        self, tree: tuple[list[np.ndarray], list[int]], toward: np.ndarray, *, reach: bool = False
+    ) -> tuple[int | None, bool]:
+        """Grow ``tree`` from its nearest node toward a pose, ``ROUTE_STEP`` at a time (once,
+        or with ``reach`` until it gets there or is blocked): the index of the last node added
+        (None if none) and whether it is the pose itself."""
+        nodes, parents = tree
+        near = int(np.argmin(np.abs(np.asarray(nodes) - toward).max(axis=1)))
+        added = None
+        while True:
+            here = nodes[near]
+            gap = toward - here
+            largest = float(np.abs(gap).max())
+            arrived = largest <= ROUTE_STEP
+            nxt = toward if arrived else here + gap * (ROUTE_STEP / largest)
+            if not self.path_clear(here, nxt):
+                return added, False
+            nodes.append(nxt)
+            parents.append(near)
+            near = added = len(nodes) - 1
+            if arrived or not reach:
+                return added, arrived
+
+
+class Avoider:
+    """Turns a solver's answer into a pose to command that keeps the chain clear, tick by tick.
+
+    Call :meth:`steer` with the measured pose, the solver's solution and the target every tick.
+    It returns the solution unchanged when its pose is clear and the chain can turn to it in a
+    clear straight line (measured again only when the joints could have used up the gap, so a
+    chain at rest costs a dot product); otherwise a clear answer for the target
+    (:meth:`Clearance.clear_answer`) and, when the straight way to it is blocked, the next via
+    pose of a route (:meth:`Clearance.route`), with status ``PROCESSING``. The clear answer and
+    the route are kept until the target moves, so they are searched once (a chain resting short
+    of the target for ``RELEASE_CALLS`` calls is handed back to the solver). When no clear
+    answer or no route is found, the solver's own solution is returned for that target: the
+    chain behaves as without obstacles (and a jammed one is reported blocked).
+
+    >>> arm = Skeleton.chain([100.0, 100.0], base_angle=math.pi / 2)
+    >>> shelf = Obstacles.from_arrays(np.array([[-50.0, 150.0, 50.0, 150.0, 0.0]]), np.empty((0, 3)))
+    >>> guide = Avoider(Clearance(arm, np.full(2, 5.0), shelf))
+    >>> through = Solution(np.zeros(2), SolveStatus.SUCCESS, 1, 0.0)  # straight up, through it
+    >>> steered = guide.steer(np.array([-1.0, 0.0]), through, np.array([0.0, 200.0]), 160.0)
+    >>> guide.clearance.is_clear(steered.angles)
+    True
+    """
+
+    def __init__(self, clearance: Clearance) -> None:
+        self.clearance = clearance
+        self._skeleton = clearance.skeleton
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget the clear answer and route (say, after the chain was found blocked)."""
+        self._target: tuple[float, float] | None = None
+        self._goal: np.ndarray | None = None
+        self._way: list[np.ndarray] = []
+        self._given_up: tuple[float, float] | None = None
+        self._resting = 0
+        self._line: tuple[np.ndarray, np.ndarray, float] | None = None
+        self._checked: tuple[np.ndarray, float] | None = None
+
+    def steer(
+        self, measured: np.ndarray, solution: Solution, target: np.ndarray, tolerance: float
+    ) -> Solution:
+        """The solution to command this tick (see the class)."""
+        room = self.clearance
+        if room.skeleton is not self._skeleton:
+            # The base moved: a plan made for it is stale, and one made now would be stale by the
+            # next tick, so the solver answers until the base stands still again.
+            self._skeleton = room.skeleton
+            self.reset()
+            return solution
+        key = (float(target[0]), float(target[1]))
+        if key != self._target:
+            self._target, self._goal, self._way = None, None, []
+        if key == self._given_up:
+            return solution
+        if self._goal is not None:
+            if not self._arrived(measured, target, tolerance):
+                return self._follow(measured, solution)
+            self.reset()
+        if self._far_enough(measured, solution.angles):
+            return solution
+        reaches = solution.status is not SolveStatus.PROCESSING
+        if reaches and room.is_clear(solution.angles):
+            if self._clear_way(measured, solution.angles):
+                return solution
+            goal = solution.angles
+        else:
+            # An answer still on its way (PROCESSING) is no goal to route to: a clear one that
+            # arrives is searched for instead.
+            goal = room.clear_answer(measured, solution.angles, target, tolerance)
+        way = None if goal is None else room.route(measured, goal)
+        if way is None:
+            # Searched once for this target: the solver's own answer it is, until it moves.
+            self._given_up = key
+            return solution
+        self._target, self._goal, self._way = key, goal, way
+        return self._follow(measured, solution)
+
+    def _arrived(self, measured: np.ndarray, target: np.ndarray, tolerance: float) -> bool:
+        """Whether the solver may answer again: the chain has rested on the clear goal (within
+        ``SETTLED`` of it on every joint) for ``RELEASE_CALLS`` calls with its end effector
+        still farther than ``tolerance`` from the target (sagging short, say), where re-solving
+        from the measured pose brings it the last pixels.
+
+        A chain resting on the goal with its end effector on the target keeps the goal until
+        the target moves: the solver's own answer (CCD's from a pose a few px short, or one it
+        followed before) can be another pose, and swinging over to it overshoots.
+        """
+        if np.abs(measured - self._goal).max() > SETTLED:
+            self._resting = 0
+            return False
+        self._resting += 1
+        if self._resting < RELEASE_CALLS:
+            return False
+        end = self.clearance.points(measured)[-1]
+        return math.hypot(*(end - target)) > tolerance
+
+    def _clear_way(self, measured: np.ndarray, pose: np.ndarray) -> bool:
+        """Whether the straight line from ``measured`` to ``pose`` is clear.
+
+        A chain moving along a line checked before is on it still, give or take: every pose of
+        the new line is within ``slack`` px (the larger of how far the chain is off the old line
+        and how far the new end is from the old one) of a pose of the old line's rest, so the
+        old line's smallest gap less that slack bounds the new one's, and the line is sampled
+        afresh only when that bound runs out.
+        """
+        room = self.clearance
+        floor = room.margin / 2.0
+        line = self._line
+        if line is not None:
+            start, end, gap = line
+            d = end - start
+            span = float(d @ d)
+            s = 0.0 if span == 0.0 else min(max(float((measured - start) @ d) / span, 0.0), 1.0)
+            slack = max(room.swept(start + s * d, measured), room.swept(end, pose))
+            if gap - slack >= floor:
+                return True
+        gaps = room.path_gaps(measured, pose)
+        clear = _clear_along(gaps, floor)
+        self._line = (measured.copy(), pose.copy(), float(gaps.min())) if clear else None
+        return clear
+
+    def _far_enough(self, measured: np.ndarray, pose: np.ndarray) -> bool:
+        """Whether the chain is so far from every obstacle that neither ``pose`` nor the way to
+        it can touch one. The gap is measured afresh only when the motion since the last
+        measure could have used it up, so a chain at rest or in the open costs a dot product."""
+        room = self.clearance
+        checked = self._checked
+        if checked is not None:
+            since, gap = checked
+            if gap - room.swept(since, measured) - room.swept(measured, pose) >= 0.0:
+                return True
+        gap = float(room.gaps(measured).min())
+        self._checked = (measured.copy(), gap)
+        return gap - room.swept(measured, pose) >= 0.0
+
+    def _follow(self, measured: np.ndarray, solution: Solution) -> Solution:
+        """The via pose to head for: the next one once the chain, near the current one (within
+        ``AHEAD`` px of sweep), can turn to it in a clear straight line, or once it rests on the
+        current one (within ``SETTLED``: each piece is clear from its start, and the chain is
+        there)."""
+        room = self.clearance
+        way = self._way
+        while len(way) > 1:
+            near = room.swept(measured, way[0]) <= AHEAD
+            if near and room.path_clear(measured, way[1]):
+                del way[0]
+            elif np.abs(measured - way[0]).max() <= SETTLED:
+                del way[0]
+            else:
+                break
+        status = SolveStatus.PROCESSING if len(way) > 1 else solution.status
+        return Solution(way[0], status, solution.iterations, solution.error)
+
+
+def _clear_along(gaps: np.ndarray, floor: float) -> bool:
+    """Whether a path with these gaps (start first) keeps ``floor`` px clear, or at least never
+    comes closer than its start already is."""
+    return bool(np.all(gaps[1:] >= min(floor, gaps[0] - 1e-9)))
+
+
+def _distance_to(x: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Distance from each x to the nearest point of each segment a-b (broadcast), px."""
+    offset = _nearest_on(x, a, b) - x
+    return np.hypot(offset[..., 0], offset[..., 1])
+
+
+def _nearest_on(x: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """The point of each segment a-b nearest each x (broadcast), px."""
+    ab = b - a
+    denom = np.maximum(np.sum(ab * ab, axis=-1), 1e-12)
+    u = np.clip(np.sum((x - a) * ab, axis=-1) / denom, 0.0, 1.0)
+    return a + u[..., None] * ab
+
+
+def _crossing(p0: np.ndarray, p1: np.ndarray, q0: np.ndarray, q1: np.ndarray) -> np.ndarray:
+    """(..., n, k) whether link segments p0-p1 (..., n, 2) cross obstacle segments q0-q1 (k, 2)."""
+    r = (p1 - p0)[..., :, None, :]
+    s = (q1 - q0)[None, :, :]
+    qp = q0[None, :, :] - p0[..., :, None, :]
+    cross = r[..., 0] * s[..., 1] - r[..., 1] * s[..., 0]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = (qp[..., 0] * s[..., 1] - qp[..., 1] * s[..., 0]) / cross
+        u = (qp[..., 0] * r[..., 1] - qp[..., 1] * r[..., 0]) / cross
+    return (cross != 0) & (t > 0) & (t < 1) & (u > 0) & (u < 1)
+
+
+def _lineage(tree: tuple[list[np.ndarray], list[int]], index: int) -> list[np.ndarray]:
+    """The poses from a tree's root to node ``index``."""
+    nodes, parents = tree
+    path = []
+    while index >= 0:
+        path.append(nodes[index])
+        index = parents[index]
+    return path[::-1]

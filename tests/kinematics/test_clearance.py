@@ -1,0 +1,203 @@
+import math
+
+import numpy as np
+import pytest
+
+from ikgame.kinematics import Skeleton, Solution, SolveStatus
+from ikgame.kinematics.clearance import Avoider, Clearance, Obstacles
+
+UP = math.pi / 2
+NO_CIRCLES = np.empty((0, 3))
+NO_SEGMENTS = np.empty((0, 5))
+
+
+def _shelf_room() -> Clearance:
+    """Three 120 px links mounted straight up, a floor 20 px below the base, and a shelf 130 px
+    up to the right (the stress level under a shelf)."""
+    arm = Skeleton.chain([120.0, 120.0, 120.0], base_angle=UP, limits=[(-2.618, 2.618)] * 3)
+    obstacles = Obstacles.from_arrays(
+        np.array([[-400.0, -20.0, 500.0, -20.0, 0.0], [130.0, 130.0, 420.0, 130.0, 6.0]]),
+        NO_CIRCLES,
+    )
+    return Clearance(arm, np.full(3, 6.0), obstacles)
+
+
+def _sampled_gaps(room: Clearance, angles: np.ndarray) -> np.ndarray:
+    """Each link's gap by brute force: 400 points along the link against 400 along each
+    obstacle, signed negative when the centre lines cross (within the sampling's precision)."""
+    pts = room.points(angles)
+    u = np.linspace(0.0, 1.0, 400)[:, None]
+    gaps = []
+    for i in range(room.skeleton.count):
+        link = pts[i] + u * (pts[i + 1] - pts[i])
+        best = math.inf
+        for ax, ay, bx, by, r in room.obstacles.capsules:
+            obstacle = np.array([ax, ay]) + u * np.array([bx - ax, by - ay])
+            d = np.hypot(*(link[:, None, :] - obstacle[None, :, :]).T).min()
+            best = min(best, d - room.radii[i] - r)
+        gaps.append(best)
+    return np.array(gaps)
+
+
+def test_obstacles_take_segments_and_circles_and_reject_bad_arrays():
+    obs = Obstacles.from_arrays(np.array([[0, 0, 1, 0, 2]]), np.array([[3, 4, 5]]))
+    assert obs.capsules.tolist() == [[0, 0, 1, 0, 2], [3, 4, 3, 4, 5]]
+    assert len(Obstacles.from_arrays(NO_SEGMENTS, NO_CIRCLES)) == 0
+    with pytest.raises(ValueError, match="segments"):
+        Obstacles.from_arrays(np.zeros((1, 4)), NO_CIRCLES)
+    with pytest.raises(ValueError, match="radii"):
+        Obstacles.from_arrays(np.array([[0, 0, 1, 0, -1]]), NO_CIRCLES)
+
+
+def test_gaps_of_a_link_beside_a_segment_and_a_disc():
+    arm = Skeleton.chain([100.0])  # along +x from the origin
+    obstacles = Obstacles.from_arrays(
+        np.array([[20.0, 30.0, 80.0, 30.0, 2.0]]), np.array([[150.0, 0.0, 10.0]])
+    )
+    room = Clearance(arm, np.array([5.0]), obstacles)
+    assert room.gaps(np.zeros(1)).tolist() == pytest.approx([30.0 - 5.0 - 2.0])
+    # Turned up 90 deg the link passes the segment's left end 20 px away, and the disc is far.
+    assert room.gaps(np.array([UP])).tolist() == pytest.approx([20.0 - 5.0 - 2.0])
+
+
+def test_a_link_through_an_obstacle_has_a_negative_gap():
+    room = _shelf_room()
+    straight_right = np.array([-UP, 0.0, 0.0])
+    assert room.gaps(straight_right).min() >= 0.0  # lying along y = 0, under the shelf
+    through = np.array([-0.9, 0.0, 0.0])  # pointing up-right, through the shelf
+    assert room.gaps(through).min() < -6.0
+    assert not room.is_clear(through)
+
+
+def test_gaps_match_brute_force_sampling():
+    room = _shelf_room()
+    rng = np.random.default_rng(5)
+    for pose in rng.uniform(-2.5, 2.5, (40, 3)):
+        exact = room.gaps(pose)
+        sampled = _sampled_gaps(room, pose)
+        clear = sampled > 0.0
+        # Sampling only overestimates a distance, by at most a sample spacing (about 2 px).
+        assert np.all(exact[clear] <= sampled[clear] + 1e-9)
+        assert np.all(exact[clear] >= sampled[clear] - 2.5)
+        # Overlapping links (sampled distance inside the radii) are negative exactly too.
+        assert np.all(exact[sampled < -1.0] < 0.0)
+
+
+def test_batch_gaps_equal_the_single_pose_gaps():
+    room = _shelf_room()
+    poses = np.random.default_rng(6).uniform(-2.5, 2.5, (25, 3))
+    batch = room.smallest_gaps(poses)
+    assert batch.tolist() == pytest.approx([room.gaps(p).min() for p in poses])
+
+
+def test_swept_bounds_how_far_any_point_moves():
+    room = _shelf_room()
+    rng = np.random.default_rng(7)
+    for _ in range(20):
+        a, b = rng.uniform(-2.5, 2.5, (2, 3))
+        line = a + np.linspace(0.0, 1.0, 200)[:, None] * (b - a)
+        pts = room.points(line)
+        moved = np.hypot(*(pts - pts[0]).T).max()
+        assert moved <= room.swept(a, b) + 1e-9
+
+
+def test_polish_turns_an_answer_through_the_shelf_into_a_clear_one_that_arrives():
+    room = _shelf_room()
+    target = np.array([290.0, 45.0])  # under the shelf, near its far end
+    through = np.array([-0.3, -1.2, -0.6])
+    assert not room.is_clear(through)
+    sol = room.polish(through, target, tolerance=0.5)
+    assert sol.status is SolveStatus.SUCCESS
+    assert room.is_clear(sol.angles)
+    assert np.hypot(*(room.points(sol.angles)[-1] - target)) <= 0.5
+    assert np.all(sol.angles >= room.skeleton.lower) and np.all(sol.angles <= room.skeleton.upper)
+
+
+def test_clear_answer_reaches_under_the_shelf_and_gives_up_inside_an_obstacle():
+    room = _shelf_room()
+    measured = np.array([0.5, 0.3, 0.2])  # up and to the left, clear
+    for target in ([200.0, 50.0], [290.0, 45.0], [170.0, 40.0]):
+        pose = room.clear_answer(measured, measured, np.array(target), 0.5)
+        assert pose is not None
+        assert room.is_clear(pose)
+        assert np.hypot(*(room.points(pose)[-1] - target)) <= 0.5
+    inside_the_shelf = np.array([250.0, 130.0])
+    assert room.clear_answer(measured, measured, inside_the_shelf, 0.5) is None
+
+
+def test_route_goes_round_the_shelf_in_clear_straight_pieces():
+    room = _shelf_room()
+    start = np.array([0.5, 0.3, 0.2])  # up-left
+    goal = room.clear_answer(start, start, np.array([290.0, 45.0]), 0.5)
+    assert not room.path_clear(start, goal)  # straight there sweeps the arm through the shelf
+    way = room.route(start, goal)
+    assert way is not None
+    assert np.array_equal(way[-1], goal)
+    for a, b in zip([start, *way], way, strict=False):
+        assert room.path_clear(a, b)
+
+
+def test_route_is_none_when_the_limits_leave_no_way_round():
+    arm = Skeleton.chain([100.0], base_angle=UP, limits=[(-1.0, 1.0)])
+    post = Obstacles.from_arrays(NO_SEGMENTS, np.array([[0.0, 80.0, 10.0]]))
+    room = Clearance(arm, np.array([5.0]), post)
+    assert room.route(np.array([-0.8]), np.array([0.8])) is None
+
+
+def test_the_avoider_steers_round_the_shelf_and_passes_clear_answers_through():
+    room = _shelf_room()
+    guide = Avoider(room)
+    target = np.array([290.0, 45.0])
+    measured = np.array([0.5, 0.3, 0.2])
+    through = Solution(np.array([-0.3, -1.2, -0.6]), SolveStatus.SUCCESS, 10, 0.0)
+    # Follow the commanded poses as a chain with ideal motors would: straight in joint space.
+    for _ in range(400):
+        command = guide.steer(measured, through, target, 0.5)
+        assert room.path_clear(measured, command.angles)
+        step = command.angles - measured
+        measured = measured + step * min(1.0, 0.05 / max(np.abs(step).max(), 1e-12))
+    assert room.is_clear(measured)
+    assert np.hypot(*(room.points(measured)[-1] - target)) <= 0.5
+    # Far from everything, the solver's answer comes back as it is.
+    open_air = Avoider(room)
+    up = np.array([0.1, 0.1, 0.1])
+    answer = Solution(np.array([0.12, 0.1, 0.1]), SolveStatus.SUCCESS, 3, 0.2)
+    assert open_air.steer(up, answer, np.array([-50.0, 350.0]), 0.5) is answer
+
+
+def test_a_chain_at_rest_in_the_open_is_not_measured_again(monkeypatch):
+    room = _shelf_room()
+    guide = Avoider(room)
+    calls = []
+    measure = room.gaps
+    monkeypatch.setattr(room, "gaps", lambda angles: calls.append(1) or measure(angles))
+    pose = np.array([0.1, 0.1, 0.1])
+    answer = Solution(pose.copy(), SolveStatus.SUCCESS, 0, 0.1)
+    for _ in range(50):
+        assert guide.steer(pose, answer, np.array([-50.0, 350.0]), 0.5) is answer
+    assert len(calls) == 1
+
+
+def test_clearance_is_for_chains_with_one_radius_per_link():
+    tree = Skeleton(
+        lengths=np.ones(3), parents=np.array([-1, 0, 0]), lower=-1.0, upper=1.0, base=(0, 0)
+    )
+    none = Obstacles.from_arrays(NO_SEGMENTS, NO_CIRCLES)
+    with pytest.raises(ValueError, match="chains"):
+        Clearance(tree, np.ones(3), none)
+    with pytest.raises(ValueError, match="radii"):
+        Clearance(Skeleton.chain([1.0, 1.0]), np.ones(3), none)
+
+
+def test_while_the_base_moves_the_solver_answers_and_the_plan_is_dropped():
+    room = _shelf_room()
+    guide = Avoider(room)
+    target = np.array([290.0, 45.0])
+    measured = np.array([0.5, 0.3, 0.2])
+    through = Solution(np.array([-0.3, -1.2, -0.6]), SolveStatus.SUCCESS, 10, 0.0)
+    assert guide.steer(measured, through, target, 0.5) is not through  # planned round
+    room.skeleton = room.skeleton.moved_to((5.0, 0.0))
+    assert guide.steer(measured, through, target, 0.5) is through  # stale for a moving base
+    # Standing still again, it plans afresh for where the base is now.
+    replanned = guide.steer(measured, through, target, 0.5)
+    assert replanned is not through and room.is_clear(replanned.angles)
