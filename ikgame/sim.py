@@ -22,9 +22,11 @@ import numpy as np
 from ikgame.control.blockage import BlockWatch
 from ikgame.control.controller import Controller
 from ikgame.control.dynamics import ChainInertia
+from ikgame.control.gait import Footing, Gait, GaitParams, Terrain
 from ikgame.control.servo import Servo
-from ikgame.kinematics import SolveStatus
+from ikgame.kinematics import SolveStatus, TargetSet
 from ikgame.level.model import (
+    CHAIN_EFFECTOR,
     MAX_COORD,
     BallProp,
     CircleObstacle,
@@ -59,8 +61,11 @@ class TickInfo:
             against something or at its torque limits, makes no progress toward it, so it holds
             its pose until the target moves (see :mod:`ikgame.control.blockage`).
         iterations: solver iterations used this tick.
-        error: end-effector distance to the target after the tick, px (nan without a target).
+        error: end-effector distance to the target after the tick, px (nan without a target);
+            for several effectors, the largest of :attr:`errors`.
         torque_limited: (n,) which motors hit their torque limit this tick.
+        errors: (k,) each effector's distance to its target, px (nan for an effector without
+            one), in the order of the level's effectors.
     """
 
     tick: int
@@ -69,6 +74,7 @@ class TickInfo:
     iterations: int
     error: float
     torque_limited: np.ndarray
+    errors: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
 
 @dataclass(frozen=True)
@@ -88,6 +94,8 @@ class RunResult:
         score: 0..100, see :mod:`ikgame.level.scoring`.
         expect: the status the level is designed to end with.
         divergence: for a ``diverged`` run, the body that blew up and the tick, else empty.
+        footing: for a creature with a gait, per leg the steps it took and how far its foot
+            slid while planted and sank into the ground (px); else empty.
     """
 
     level: str
@@ -101,25 +109,30 @@ class RunResult:
     score: float = 0.0
     expect: str = "passed"
     divergence: str = ""
+    footing: dict[str, dict[str, float | int]] = field(default_factory=dict)
 
     def as_dict(self) -> dict[str, object]:
         """Plain data in a fixed key order."""
-        return {
-            "level": self.level,
-            "solver": self.solver,
-            "status": self.status,
-            "expect": self.expect,
-            "score": self.score,
-            "steps_passed": sum(s.passed for s in self.steps),
-            "steps_total": len(self.steps),
-            "goals_passed": sum(g.passed for g in self.goals),
-            "goals_total": len(self.goals),
-            "ticks": self.ticks,
-            "sim_time": round(self.sim_time, 6),
-            "steps": [s.as_dict() for s in self.steps],
-            "goals": [g.as_dict() for g in self.goals],
-            "options": dict(self.options),
-        } | ({"divergence": self.divergence} if self.divergence else {})
+        return (
+            {
+                "level": self.level,
+                "solver": self.solver,
+                "status": self.status,
+                "expect": self.expect,
+                "score": self.score,
+                "steps_passed": sum(s.passed for s in self.steps),
+                "steps_total": len(self.steps),
+                "goals_passed": sum(g.passed for g in self.goals),
+                "goals_total": len(self.goals),
+                "ticks": self.ticks,
+                "sim_time": round(self.sim_time, 6),
+                "steps": [s.as_dict() for s in self.steps],
+                "goals": [g.as_dict() for g in self.goals],
+                "options": dict(self.options),
+            }
+            | ({"divergence": self.divergence} if self.divergence else {})
+            | ({"footing": self.footing} if self.footing else {})
+        )
 
 
 class Simulation:
@@ -144,6 +157,7 @@ class Simulation:
             np.array([link.length for link in level.chain.expanded_links]),
             self.world.link_masses,
             self.world.link_moments,
+            parents=None if self.world.skeleton.is_chain else self.world.parents,
         )
         servo = Servo(
             inertia,
@@ -162,7 +176,16 @@ class Simulation:
         )
         self._solver_pinned = solver is not None
         self._start_solver = self.controller.solver_name
-        self.script = ScriptRunner(level.script)
+        chain = level.chain
+        self.effector_names = chain.effector_names
+        """The end effectors' names, in link order (a chain's one is ``"tip"``)."""
+        self._effector_links = np.array(chain.effector_links, dtype=np.int64)
+        self._effector_weights = np.array(
+            [chain.expanded_links[i].weight for i in chain.effector_links], dtype=float
+        )
+        # A chain keeps aiming its tip at a point; anything else aims a set of named targets.
+        self._multi = self.effector_names != (CHAIN_EFFECTOR,)
+        self.script = ScriptRunner(level.script, effectors=level.script_effectors)
         self.goals = GoalTracker(level.goals, [p.name for p in level.props])
         self.dt = 1.0 / level.world.tick_rate
         self.tick = 0
@@ -170,17 +193,28 @@ class Simulation:
         self._divergence = ""
         self.record = record
         self.snapshots: list[Snapshot] = []
-        self._override: np.ndarray | None = None
+        self._overrides: dict[str, np.ndarray] = {}
         self._max_ticks = round(level.level.duration * level.world.tick_rate)
         self._fps = level.world.fps
         self._tick_rate = level.world.tick_rate
-        self._last = TickInfo(0, 0.0, "processing", 0, math.nan, np.zeros(self.world.count, bool))
+        self._last = TickInfo(
+            0,
+            0.0,
+            "processing",
+            0,
+            math.nan,
+            np.zeros(self.world.count, bool),
+            np.full(len(self.effector_names), math.nan),
+        )
         self._result: RunResult | None = None
         self.scene = _scene(level, self.world, self.script)
         self._has_goals = bool(level.goals)
         self._watch = BlockWatch(dt=self.dt, arrival=level.chain.arrival)
-        self._blocked_target: np.ndarray | None = None
+        self._blocked_target: np.ndarray | TargetSet | None = None
         self._blocked_in_step = False
+        self.gait, self._footing = _gait(level, self.world, self.scene)
+        """The creature's :class:`~ikgame.control.gait.Gait` when the level has a ``[gait]``."""
+        self._gait_targets: dict[str, np.ndarray] = {}
         self._effector = self.world.end_effector()
         if self._has_goals:
             self.goals.observe(0.0, self.world.prop_states())
@@ -192,16 +226,49 @@ class Simulation:
 
     @property
     def target(self) -> np.ndarray | None:
-        """The point the chain aims at, px: the code's override if set, else the script's."""
-        return self._override if self._override is not None else self.script.target
+        """The point the chain's tip aims at, px: the code's override if set, else the script's.
+
+        For a skeleton of several effectors, the first effector's (read :attr:`targets` for
+        all of them, and aim them with :meth:`set_target`).
+        """
+        return self.targets.get(self.effector_names[0])
 
     @target.setter
     def target(self, point: tuple[float, float] | np.ndarray | None) -> None:
         """Aim at ``point`` from code (px); ``None`` hands control back to the script."""
         if point is None:
-            self._override = None
+            self._overrides.clear()
             return
-        self._override = _check_target(point)
+        if len(self.effector_names) > 1:
+            raise ValueError(
+                f"this skeleton has {len(self.effector_names)} effectors "
+                f"({', '.join(self.effector_names)}): aim one with set_target(name, point)"
+            )
+        self.set_target(self.effector_names[0], point)
+
+    @property
+    def targets(self) -> dict[str, np.ndarray]:
+        """Every effector's target now, px, by name: the code's overrides, else the gait's
+        (for a creature's feet), else the script's; effectors without a target are absent."""
+        return self.script.targets | self._gait_targets | self._overrides
+
+    def set_target(self, effector: str, point: tuple[float, float] | np.ndarray | None) -> None:
+        """Aim the effector named ``effector`` at ``point`` (px) from code; ``None`` hands it
+        back to the script (or the gait).
+
+        >>> from ikgame.level import DEFAULT_LEVEL, load_level
+        >>> sim = Simulation(load_level(DEFAULT_LEVEL), record=False)
+        >>> sim.set_target("tip", (100.0, 200.0)); sim.target.tolist()
+        [100.0, 200.0]
+        """
+        if effector not in self.effector_names:
+            raise ValueError(
+                f"no effector is named {effector!r} (effectors: {', '.join(self.effector_names)})"
+            )
+        if point is None:
+            self._overrides.pop(effector, None)
+        else:
+            self._overrides[effector] = _check_target(point)
 
     @property
     def done(self) -> bool:
@@ -218,7 +285,8 @@ class Simulation:
         return self.world.joint_angles()
 
     def joint_positions(self) -> np.ndarray:
-        """(n + 1, 2) joint positions then the end effector, world px."""
+        """World joint positions, px: (n + 1, 2), the joints then the tip, for a chain; (2n, 2),
+        the link starts then the link ends, for a tree of bones."""
         return self.world.joint_positions()
 
     def step(self) -> TickInfo:
@@ -234,8 +302,18 @@ class Simulation:
         if info is None:
             return self._last
         finished = len(self.script.outcomes)
-        self.script.observe(self.time, self.dt, self._effector)
+        if self._multi:
+            reached = self.world.effector_positions()
+            self.script.observe(
+                self.time, self.dt, dict(zip(self.effector_names, reached, strict=True))
+            )
+        else:
+            self.script.observe(self.time, self.dt, self._effector)
         self._note_blocked(finished)
+        if self.gait is not None:
+            self._footing.observe(
+                self.gait.feet, dict(zip(self.effector_names, reached, strict=True))
+            )
         if self._has_goals:
             self.goals.observe(self.time, self.world.prop_states())
         self._last = info
@@ -256,7 +334,12 @@ class Simulation:
     def _tick(self, *, count: bool = True) -> TickInfo | None:
         """Target, solve, command the motors, step the world, watch for a jam; None if the
         physics blew up."""
-        target = self.target
+        if self.gait is not None:
+            base = self.world.base_body
+            self._gait_targets = self.gait.update(
+                self.time + self.dt, self.dt, tuple(base.position), base.angle
+            )
+        target = self._goal()
         self._release_if_moved(target)
         angles, velocities = self.world.joint_state()
         command = self.controller.command(
@@ -265,6 +348,7 @@ class Simulation:
             velocities=velocities,
             gravity=self.world.gravity,
             dt=self.dt,
+            base_motion=self.world.base_motion(),
         )
         drive = command.drive
         self.world.drive(drive.rates, drive.torques, drive.forces, drive.budgets)
@@ -277,8 +361,9 @@ class Simulation:
         if self.world.skeleton is not self.controller.skeleton:
             # The base moved: the solver must work from where it is now.
             self.controller.skeleton = self.world.skeleton
-        effector = self._effector = self.world.end_effector()
-        error = math.nan if target is None else float(np.hypot(*(effector - target)))
+        self._effector = self.world.end_effector()
+        errors = self._errors(target)
+        error = float(np.max(errors)) if target is not None else math.nan
         limited = self.world.torque_limited()
         status = command.solution.status.value
         if target is not None and self._blocked_target is None:
@@ -294,11 +379,51 @@ class Simulation:
                 )
 
             if self._watch.observe(error=error, reachable=reachable, pushing=pushing):
-                self._blocked_target = target.copy()
+                self._blocked_target = target.copy() if isinstance(target, np.ndarray) else target
                 self.controller.hold(self.world.joint_angles())
         if self._blocked_target is not None:
             status = "blocked"
-        return TickInfo(self.tick, self.time, status, command.solution.iterations, error, limited)
+        return TickInfo(
+            self.tick,
+            self.time,
+            status,
+            command.solution.iterations,
+            error,
+            limited,
+            self._all_errors(target, errors),
+        )
+
+    def _goal(self) -> np.ndarray | TargetSet | None:
+        """What the controller aims at this tick: the tip's point for a chain, else the set of
+        every targeted effector (in link order, with its weight)."""
+        targets = self.targets
+        if not self._multi:
+            return targets.get(CHAIN_EFFECTOR)
+        aimed = [j for j, name in enumerate(self.effector_names) if name in targets]
+        if not aimed:
+            return None
+        return TargetSet(
+            self._effector_links[aimed],
+            [targets[self.effector_names[j]] for j in aimed],
+            self._effector_weights[aimed],
+        )
+
+    def _errors(self, target: np.ndarray | TargetSet | None) -> np.ndarray:
+        """Each aimed effector's distance to its target after the tick, px."""
+        if target is None:
+            return np.zeros(0)
+        if isinstance(target, TargetSet):
+            reached = self.world.link_ends(target.links)
+            return np.hypot(*(reached - target.points).T)
+        return np.array([np.hypot(*(self._effector - target))])
+
+    def _all_errors(self, target: np.ndarray | TargetSet | None, errors: np.ndarray) -> np.ndarray:
+        """(k,) every effector's error, nan for those without a target."""
+        if not isinstance(target, TargetSet):
+            return np.full(1, math.nan) if target is None else errors
+        out = np.full(len(self.effector_names), math.nan)
+        out[np.searchsorted(self._effector_links, target.links)] = errors
+        return out
 
     def _note_blocked(self, finished: int) -> None:
         """Mark the steps that ended while the chain was blocked, in their outcome's note."""
@@ -312,12 +437,12 @@ class Simulation:
         if len(outcomes) > finished:
             self._blocked_in_step = False
 
-    def _release_if_moved(self, target: np.ndarray | None) -> None:
-        """A blocked chain tries again once its target has moved (or is handed back)."""
+    def _release_if_moved(self, target: np.ndarray | TargetSet | None) -> None:
+        """A blocked chain tries again once a target has moved (or is handed back)."""
         blocked = self._blocked_target
         if blocked is None:
             return
-        if target is None or np.hypot(*(target - blocked)) > self.controller.arrival:
+        if target is None or _moved_by(target, blocked) > self.controller.arrival:
             self._blocked_target = None
             self._watch.reset()
             self.controller.release()
@@ -343,8 +468,9 @@ class Simulation:
                 self.controller.set_solver(change.solver)
             if change.gain is not None:
                 self.controller.gain = change.gain
-            if change.base is not None:
-                self.world.move_base(change.base, change.over)
+            if change.base is not None or change.angle is not None:
+                angle = None if change.angle is None else math.radians(change.angle)
+                self.world.move_base(change.base, change.over, angle)
 
     @property
     def result(self) -> RunResult:
@@ -378,6 +504,7 @@ class Simulation:
             ),
             expect=self.level.level.expect,
             divergence=self._divergence,
+            footing={} if self._footing is None else self._footing.as_dict(),
         )
         if self.done:
             self._result = result
@@ -385,22 +512,45 @@ class Simulation:
 
     def snapshot(self) -> Snapshot:
         """The state now, as plain arrays."""
-        target = self.target
         joints = self.world.joint_positions()
         angles = self.world.joint_angles()
+        skeleton = self.world.skeleton
+        path = np.cumsum(angles) if skeleton.is_chain else skeleton.ancestors @ angles
+        if self.world.is_tree:
+            targets = self.targets
+            aims = np.array(
+                [targets.get(name, (math.nan, math.nan)) for name in self.effector_names],
+                dtype=float,
+            )
+            target, errors = None, self._last.errors.copy()
+        else:
+            target, aims, errors = self.target, None, None
         return Snapshot(
             time=self.time,
             tick=self.tick,
             joints=joints,
             angles=angles,
-            world_angles=np.cumsum(angles) + self.world.skeleton.base_angle,
+            world_angles=path + skeleton.base_angle,
             target=None if target is None else target.copy(),
             step_index=self.script.step_index,
             error=self._last.error,
             solver_status=self._last.solver_status,
             torque_limited=self._last.torque_limited.copy(),
             props=self.world.prop_states(),
+            targets=aims,
+            errors=errors,
         )
+
+
+def _moved_by(target: np.ndarray | TargetSet, before: np.ndarray | TargetSet) -> float:
+    """How far (px) the farthest target moved from ``before``; inf when the set changed."""
+    if isinstance(target, TargetSet) and isinstance(before, TargetSet):
+        if not np.array_equal(target.links, before.links):
+            return math.inf
+        return float(np.max(np.hypot(*(target.points - before.points).T)))
+    if isinstance(target, TargetSet) or isinstance(before, TargetSet):
+        return math.inf
+    return float(np.hypot(*(target - before)))
 
 
 def _check_target(point: object) -> np.ndarray:
@@ -440,13 +590,58 @@ def run_level(level: Level, *, solver: str | None = None, record: bool = True) -
     return sim
 
 
+def _gait(level: Level, world: World, scene: Scene) -> tuple[Gait | None, Footing | None]:
+    """The level's gait, its feet resting where the start pose puts them (in the body's
+    frame), standing on the level's obstacles; and what measures how the feet hold."""
+    if level.gait is None:
+        return None, None
+    config = level.gait
+    names = level.chain.effector_names
+    links = [level.chain.effector_links[names.index(leg)] for leg in config.legs]
+    skeleton = world.skeleton
+    c, s = math.cos(skeleton.base_angle), math.sin(skeleton.base_angle)
+    relative = world.link_ends(np.array(links)) - skeleton.base
+    rest = relative @ np.array(((c, -s), (s, c)))
+    # How far below its rest spot each foot can reach: its leg stretched, less the way from the
+    # hip to the rest spot.
+    hips = skeleton.root_points()[links]
+    lengths = skeleton.ancestors[links] @ skeleton.lengths
+    spare = lengths - np.hypot(*(world.link_ends(np.array(links)) - hips).T)
+    # A foot's end is the centre of its round tip: it stands its radius above the ground.
+    radius = float(world.link_widths[links].max()) / 2
+    ground = Terrain(*_grown(scene.segments, scene.circles, radius))
+    gait = Gait(
+        GaitParams(
+            stride=config.stride,
+            step_height=config.step_height,
+            step_time=config.step_time,
+            threshold=config.stride / 2 if config.threshold is None else config.threshold,
+        ),
+        dict(zip(config.legs, rest, strict=True)),
+        ground,
+        position=skeleton.base,
+        angle=skeleton.base_angle,
+        groups=config.groups,
+        reach=max(float(spare.min()), 1.0),
+    )
+    return gait, Footing(config.legs, ground, settle=max(level.chain.arrival, 1.0))
+
+
+def _grown(segments: np.ndarray, circles: np.ndarray, by: float) -> tuple[np.ndarray, np.ndarray]:
+    """Segment and circle obstacles ``by`` px thicker (the ground a round tip's centre meets)."""
+    grown_segments, grown_circles = segments.copy(), circles.copy()
+    grown_segments[:, 4] += by
+    grown_circles[:, 2] += by
+    return grown_segments, grown_circles
+
+
 def _scene(level: Level, world: World, script: ScriptRunner) -> Scene:
     segments = [(*o.a, *o.b, o.radius) for o in level.obstacles if isinstance(o, SegmentObstacle)]
     circles = [(*o.center, o.radius) for o in level.obstacles if isinstance(o, CircleObstacle)]
     targets = []
     for _, step in script.steps:
         if isinstance(step, ReachStep):
-            targets.append(step.reach)
+            targets.extend(step.points)
         elif isinstance(step, FollowLine | FollowCircle | FollowLissajous | FollowPolyline):
             targets.append(follow_path(step)(0.0))
     props = tuple(
@@ -455,6 +650,24 @@ def _scene(level: Level, world: World, script: ScriptRunner) -> Scene:
         else PropShape("box", p.size)
         for p in level.props
     )
+    tree = {}
+    if world.is_tree:
+        names = level.chain.effector_names
+        aims: dict[str, list[tuple[float, float]]] = {name: [] for name in names}
+        for _, step in script.steps:
+            if isinstance(step, ReachStep):
+                for name, point in step.targets(script.default_effector).items():
+                    aims[name].append(point)
+            elif isinstance(step, FollowLine | FollowCircle | FollowLissajous | FollowPolyline):
+                aims[step.effector or script.default_effector].append(follow_path(step)(0.0))
+        tree = {
+            "parents": world.parents.copy(),
+            "effector_links": world.effector_links.copy(),
+            "effector_names": names,
+            "effector_targets": tuple(
+                np.array(aims[name], dtype=float).reshape(-1, 2) for name in names
+            ),
+        }
     return Scene(
         level_name=level.level.name,
         segments=np.array(segments, dtype=float).reshape(-1, 5),
@@ -467,4 +680,5 @@ def _scene(level: Level, world: World, script: ScriptRunner) -> Scene:
         bounds=level.world.bounds,
         step_count=len(script.steps),
         fps=float(level.world.fps),
+        **tree,
     )

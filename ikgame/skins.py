@@ -61,9 +61,10 @@ def level_sprites(
             problems.append(problem_at(level_file, loc, message))
             return None
 
+    chain = level.chain
     links = []
-    for i, link in enumerate(level.chain.links):
-        sprite = load(("chain", "links", i, "sprite"), link, link.length)
+    for i, link in enumerate(chain.entries):
+        sprite = load(("chain", chain.entry_field, i, "sprite"), link, link.length)
         links.extend([sprite] * link.repeat)
     props = [
         load(("props", i, "sprite"), p, 2 * p.radius if isinstance(p, BallProp) else p.size[0])

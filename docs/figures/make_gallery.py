@@ -1,7 +1,7 @@
 """Make the README's pictures from shipped levels: ``python docs/figures/make_gallery.py``.
 
-Runs each level through the same path as ``ikgame run`` and keeps the animation of one and the
-contact sheets of a few, small enough to commit.
+Runs each level through the same path as ``ikgame run`` and keeps the animations of a few and
+the contact sheets of others, small enough to commit.
 """
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ from ikgame.sim import Simulation
 from ikgame.skins import skin_scene
 
 HERE = Path(__file__).resolve().parent
-ANIMATED = "12_push_the_ball"
+ANIMATED = ("12_push_the_ball", "15_two_hands", "16_walker", "17_head_and_tail")
 SHEETS = ("02_tentacle", "07_figure_eight", "10_moving_base", "13_conductor", "14_skinned_arm")
 SIZE = (400, 225)  # px: small enough for a README, large enough to read
 
@@ -34,7 +34,8 @@ def _export(name: str, **options: bool) -> Path:
 
 
 def main() -> None:
-    shutil.copyfile(_export(ANIMATED, gif=True) / "run.gif", HERE / f"{ANIMATED}.gif")
+    for name in ANIMATED:
+        shutil.copyfile(_export(name, gif=True) / "run.gif", HERE / f"{name}.gif")
     for name in SHEETS:
         shutil.copyfile(_export(name, gif=False, sheet=True) / "sheet.png", HERE / f"{name}.png")
 

@@ -37,7 +37,7 @@ from ikgame.render.pillow import render_snapshot
 from ikgame.render.theme import Theme, load_theme
 from ikgame.sim import RunResult, Simulation
 from ikgame.skins import level_sprites
-from ikgame.snapshot import Sprite
+from ikgame.snapshot import Sprite, effector_positions
 
 __all__ = [
     "BINDINGS",
@@ -145,6 +145,7 @@ class PlayState:
         self.quit = False
         self.gravity_on = True
         self.held: np.ndarray | None = None  # the world point the mouse holds, px
+        self._grabbed = "tip"  # the effector the mouse holds
         self.message = ""
         # Counts changes to what the window shows: an unchanged picture is not drawn again.
         self.revision = 0
@@ -192,16 +193,18 @@ class PlayState:
         self._trail: deque[np.ndarray] = deque(
             maxlen=max(2, round(TRAIL_SECONDS * self.level.world.fps) + 1)
         )
-        self._trail.append(self.sim.world.end_effector())
         self._drawable = self.sim.snapshot()  # the latest state without a NaN in it
+        self._trail.append(effector_positions(self.scene, self._drawable))
         self._backlog = 0.0
         self._pending_steps = 0
         # Ticks after the run ended, and the telemetry of the latest of them.
         self._extra_ticks = 0
         self._extra: tuple[str, float, np.ndarray] | None = None
         self.result: RunResult | None = None  # once the run is over
-        if self.held is not None:
-            self.sim.target = self.held
+        if self.held is not None and self._grabbed in self.sim.effector_names:
+            self.sim.set_target(self._grabbed, self.held)
+        else:
+            self.held = None
 
     def reload(self) -> bool:
         """Read the level file again and restart it; on a broken file keep the running level,
@@ -227,14 +230,18 @@ class PlayState:
         self.revision += 1
         if isinstance(event, MouseDown):
             self.held = self.pixel_to_world(event.pixel)
-            self.sim.target = self.held
+            # The mouse takes the effector nearest to where it pressed (a chain's only one).
+            reached = self.sim.world.effector_positions()
+            nearest = int(np.argmin(np.hypot(*(reached - self.held).T)))
+            self._grabbed = self.sim.effector_names[nearest]
+            self.sim.set_target(self._grabbed, self.held)
         elif isinstance(event, MouseMove):
             if self.held is not None:
                 self.held = self.pixel_to_world(event.pixel)
-                self.sim.target = self.held
+                self.sim.set_target(self._grabbed, self.held)
         elif isinstance(event, MouseUp):
             self.held = None
-            self.sim.target = None
+            self.sim.set_target(self._grabbed, None)
         elif isinstance(event, KeyPress):
             action = _ACTIONS.get(event.name)
             if action is not None:
@@ -291,7 +298,7 @@ class PlayState:
         ticks = sim.tick + self._extra_ticks
         fps, rate = self.level.world.fps, self.level.world.tick_rate
         if ticks * fps // rate != (ticks - 1) * fps // rate:
-            self._trail.append(sim.world.end_effector())
+            self._trail.append(effector_positions(self.scene, sim.snapshot()))
 
     def _play_on(self) -> None:
         """A tick after the run is over: its result stays as it ended, while the chain keeps
@@ -365,8 +372,8 @@ class PlayState:
         if np.all(np.isfinite(snapshot.joints)) and np.all(np.isfinite(snapshot.props)):
             self._drawable = snapshot
         snapshot = self._drawable
-        trail = np.array([*self._trail, snapshot.joints[-1]])
-        trail = trail[np.all(np.isfinite(trail), axis=1)]
+        # (m, k, 2): a column per effector; the renderer skips points that are not finite.
+        trail = np.array([*self._trail, effector_positions(self.scene, snapshot)])
         return render_snapshot(self.scene, snapshot, self.camera, self.theme, trail=trail)
 
     def image(self) -> Image.Image:

@@ -21,7 +21,15 @@ import numpy as np
 
 from ikgame.control._floats import damped_rates
 from ikgame.control.servo import FLOAT_LINKS, Servo, ServoCommand
-from ikgame.kinematics import RobustSolver, Skeleton, Solution, SolveStatus, wrap_angle
+from ikgame.kinematics import (
+    RobustSolver,
+    Skeleton,
+    Solution,
+    SolveStatus,
+    TargetSet,
+    stacked_jacobian,
+    wrap_angle,
+)
 from ikgame.kinematics.jacobian import jacobian
 
 __all__ = ["Command", "Controller", "joint_error"]
@@ -130,33 +138,65 @@ class Controller:
         self.solver.solver_name = name
 
     def _goal_rates(
-        self, measured: np.ndarray, target: np.ndarray | None, dt: float
+        self,
+        measured: np.ndarray,
+        target: np.ndarray | TargetSet | None,
+        dt: float,
+        base_motion: tuple[np.ndarray, float] | None,
     ) -> np.ndarray | None:
-        """Joint rates (rad/s) that carry the end effector along with a moving target.
+        """Joint rates (rad/s) that carry the end effectors along with moving targets.
 
-        The least-norm rates for the target's velocity (a damped pseudo-inverse of the
-        Jacobian), so the chain moves with the target and the servo only closes the error on
-        top, instead of lagging behind; rates beyond a joint's speed limit are scaled down
-        together, keeping the direction. Rates over ``JUMP`` times the limit mean the target
-        jumped (a new reach step): a new goal to brake toward, not a motion to follow.
+        The least-norm rates for the targets' velocities relative to the base (a damped
+        pseudo-inverse of the stacked Jacobian), so the chain moves with its targets, and holds
+        a still target while its base is carried, instead of lagging behind; the servo only
+        closes the error on top. Rates beyond a joint's speed limit are scaled down together,
+        keeping the direction. Rates over ``JUMP`` times the limit mean a target jumped (a new
+        reach step): a new goal to brake toward, not a motion to follow.
         """
         previous, self._last_target = self._last_target, target
         if target is None or previous is None:
             return None
-        velocity = (target - previous) / dt
-        if not velocity.any():
+        if isinstance(target, TargetSet) != isinstance(previous, TargetSet):
+            return None
+        if isinstance(target, TargetSet):
+            if not np.array_equal(previous.links, target.links):
+                return None
+            points, links = target.points, target.links
+            velocity = (target.points - previous.points) / dt
+        else:
+            points, links = target[None, :], None
+            velocity = ((target - previous) / dt)[None, :]
+        if base_motion is not None:
+            # The base carries each effector at its own velocity plus its spin about the base.
+            base_velocity, spin = base_motion
+            arms = points - self.skeleton.base
+            velocity = velocity - base_velocity - spin * np.column_stack((-arms[:, 1], arms[:, 0]))
+        if not np.any(velocity):
             return None
         skeleton, damping = self.skeleton, self._damping
-        if skeleton.count <= FLOAT_LINKS:
+        if links is None and skeleton.is_chain and skeleton.count <= FLOAT_LINKS:
+            # A short chain's 2x2 system in closed form: np.linalg.solve and the checked
+            # Jacobian cost more than the system itself.
             base = (float(skeleton.base[0]), float(skeleton.base[1]))
-            lengths, angles = skeleton.lengths.tolist(), measured.tolist()
-            vx, vy = velocity.tolist()
+            vx, vy = velocity[0].tolist()
             rates = np.array(
-                damped_rates(lengths, base, skeleton.base_angle, angles, (vx, vy), damping)
+                damped_rates(
+                    skeleton.lengths.tolist(),
+                    base,
+                    skeleton.base_angle,
+                    measured.tolist(),
+                    (vx, vy),
+                    damping,
+                )
             )
         else:
-            arms = jacobian(skeleton, measured)
-            rates = arms.T @ np.linalg.solve(arms @ arms.T + damping * np.eye(2), velocity)
+            if links is None:
+                arms = jacobian(skeleton, measured)
+            else:
+                arms = stacked_jacobian(skeleton, measured, links)
+            velocity = velocity.reshape(-1)
+            eye = np.eye(len(velocity))
+            rates = arms.T @ np.linalg.solve(arms @ arms.T + damping * eye, velocity)
         over = float(np.max(np.abs(rates) / self.max_speed))
         if over > JUMP:
             return None
@@ -183,17 +223,21 @@ class Controller:
     def command(
         self,
         measured: np.ndarray,
-        target: np.ndarray | None,
+        target: np.ndarray | TargetSet | None,
         *,
         velocities: np.ndarray | None = None,
         gravity: tuple[float, float] | np.ndarray = (0.0, 0.0),
         dt: float | None = None,
+        base_motion: tuple[np.ndarray, float] | None = None,
     ) -> Command:
-        """Motor commands toward ``target`` (px) from the ``measured`` local angles (radians).
+        """Motor commands toward ``target`` from the ``measured`` local angles (radians).
 
-        With a servo, ``velocities`` (rad/s, child - parent), ``gravity`` (px/s^2) and the tick
-        ``dt`` (s) are needed too. With no target the chain holds the last pose it was asked
-        for (or its current one).
+        ``target`` is the tip's target point (px) or, for a tree, a
+        :class:`~ikgame.kinematics.TargetSet` of effector links and points. With a servo,
+        ``velocities`` (rad/s, child - parent), ``gravity`` (px/s^2) and the tick ``dt`` (s)
+        are needed too, and while the base moves ``base_motion``: its velocity (px/s) and spin
+        (rad/s). With no target the chain holds the last pose it was asked for (or its current
+        one).
         """
         if target is None or self._holding:
             if self._held is None:
@@ -204,9 +248,10 @@ class Controller:
                 start = np.array(measured, dtype=float)  # nothing to wrap
             else:
                 start = np.where(self._limited, measured, [wrap_angle(a) for a in measured])
-            solution = self.solver.solve(
-                start, target, max_iterations=self.iterations, tolerance=self.arrival
+            solve = (
+                self.solver.solve_targets if isinstance(target, TargetSet) else self.solver.solve
             )
+            solution = solve(start, target, max_iterations=self.iterations, tolerance=self.arrival)
             self._held = solution.angles
         error = joint_error(solution.angles, measured, self._limited)
         if self.servo is None:
@@ -214,14 +259,30 @@ class Controller:
             return Command(solution, rates)
         if velocities is None or dt is None:
             raise ValueError("a controller with a servo needs the joint velocities and dt")
-        moved = target is not None and (
-            self._last_target is None or bool((target != self._last_target).any())
-        )
+        moved = target is not None and _moved(target, self._last_target)
         if moved:
             # The goal may be within the torque budget now: stalled joints try again.
             self.servo.retry()
-        world_angles = np.cumsum(measured) + self.skeleton.base_angle
+        skeleton = self.skeleton
+        path = np.cumsum(measured) if skeleton.is_chain else skeleton.ancestors @ measured
+        world_angles = path + skeleton.base_angle
         drive = self.servo.command(
-            error, world_angles, velocities, gravity, dt, self._goal_rates(measured, target, dt)
+            error,
+            world_angles,
+            velocities,
+            gravity,
+            dt,
+            self._goal_rates(measured, target, dt, base_motion),
         )
         return Command(solution, drive.rates, drive)
+
+
+def _moved(target: np.ndarray | TargetSet, last: np.ndarray | TargetSet | None) -> bool:
+    """True when ``target`` differs from the ``last`` one (a point, or a set of targets)."""
+    if last is None or isinstance(target, TargetSet) != isinstance(last, TargetSet):
+        return True
+    if isinstance(target, TargetSet):
+        return not (
+            np.array_equal(target.links, last.links) and np.array_equal(target.points, last.points)
+        )
+    return bool(np.any(target != last))

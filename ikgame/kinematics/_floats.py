@@ -11,12 +11,22 @@ import math
 from ikgame.kinematics.skeleton import Skeleton
 
 
+def check_chain(skeleton: Skeleton) -> None:
+    """``ValueError`` unless ``skeleton`` is a serial chain with its joint 0 on the base."""
+    if not skeleton.is_chain:
+        raise ValueError("this solver needs a serial chain (parents[i] == i - 1)")
+    if skeleton.has_root_offsets:
+        raise ValueError(
+            "this solver needs joint 0 on the base (zero root_offsets); "
+            "the multi-target solvers take root offsets"
+        )
+
+
 class FloatChain:
     """A chain's lengths, limits and base as floats, with forward kinematics on lists."""
 
     def __init__(self, skeleton: Skeleton) -> None:
-        if not skeleton.is_chain:
-            raise ValueError("this solver needs a serial chain (parents[i] == i - 1)")
+        check_chain(skeleton)
         self.lengths: list[float] = skeleton.lengths.tolist()
         self.lower: list[float] = skeleton.lower.tolist()
         self.upper: list[float] = skeleton.upper.tolist()

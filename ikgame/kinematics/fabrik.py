@@ -138,12 +138,17 @@ class _Links(FloatChain):
     """A chain as floats, with FABRIK's way of fitting an angle into a joint's limits."""
 
     def limited(self, i: int, angle: float, previous: float) -> float:
-        """``angle`` as joint ``i``'s angle: wrapped if the joint is free, else clamped into its
-        limits from the representative nearest ``previous`` (so never round the long way)."""
-        if self.free[i]:
-            return wrap_angle(angle)
-        nearest = previous + wrap_angle(angle - previous)
-        return min(max(nearest, self.lower[i]), self.upper[i])
+        """``angle`` as joint ``i``'s angle (see :func:`fit_angle`)."""
+        return fit_angle(angle, previous, self.free[i], self.lower[i], self.upper[i])
+
+
+def fit_angle(angle: float, previous: float, free: bool, lower: float, upper: float) -> float:
+    """``angle`` as a joint's angle: wrapped if the joint is free, else clamped into its limits
+    from the representative nearest ``previous`` (so never round the long way)."""
+    if free:
+        return wrap_angle(angle)
+    nearest = previous + wrap_angle(angle - previous)
+    return min(max(nearest, lower), upper)
 
 
 def _stretched_toward(links: _Links, tx: float, ty: float) -> np.ndarray:

@@ -26,6 +26,7 @@ from typing import Final
 
 import numpy as np
 
+from ikgame.kinematics._floats import check_chain
 from ikgame.kinematics.ccd import TRIVIAL_ARC_LENGTH
 from ikgame.kinematics.skeleton import Skeleton, check_angles, check_point
 from ikgame.kinematics.solver import Solution, SolveStatus
@@ -111,7 +112,7 @@ def jacobian(skeleton: Skeleton, angles: np.ndarray) -> np.ndarray:
     >>> jacobian(Skeleton.chain([10, 10]), np.zeros(2))[1].tolist()
     [20.0, 10.0]
     """
-    _check_chain(skeleton)
+    check_chain(skeleton)
     points = _chain_points(skeleton, check_angles(angles, skeleton.count))
     arms = points[-1] - points[:-1]
     return np.vstack((-arms[:, 1], arms[:, 0]))
@@ -191,20 +192,14 @@ def solve_dls(
         ry = arms[:, 1]
         step = _damped_step(rx, ry, ex, ey, damping)
         if has_limits:
-            free = ~(
-                ((current <= skeleton.lower) & (step < 0.0))
-                | ((current >= skeleton.upper) & (step > 0.0))
-            )
+            free = ~_pressing(skeleton, current, step)
             if not free.all():
                 step = _damped_step(rx * free, ry * free, ex, ey, damping)
-        largest = float(np.abs(step).max())
-        if largest > MAX_STEP:
-            step *= MAX_STEP / largest
-        return step
+        return _capped(step)
 
     def adapt(improved: bool) -> None:
         nonlocal mu
-        mu = max(mu * MU_DOWN, MU_MIN) if improved else min(mu * MU_UP, MU_MAX)
+        mu = _next_mu(mu, improved=improved)
 
     return _descend(skeleton, angles, target, max_iterations, tolerance, propose, adapt)
 
@@ -276,6 +271,24 @@ def _next_gain(gain: float, *, improved: bool) -> float:
     return min(gain * GAIN_GROW, GAIN_MAX) if improved else gain * GAIN_SHRINK
 
 
+def _next_mu(mu: float, *, improved: bool) -> float:
+    """The damped-least-squares factor after a step: lowered (to ``MU_MIN``) or raised."""
+    return max(mu * MU_DOWN, MU_MIN) if improved else min(mu * MU_UP, MU_MAX)
+
+
+def _pressing(skeleton: Skeleton, angles: np.ndarray, step: np.ndarray) -> np.ndarray:
+    """(n,) bool: the joints on a limit that ``step`` (radians) pushes further into it."""
+    return ((angles <= skeleton.lower) & (step < 0.0)) | ((angles >= skeleton.upper) & (step > 0.0))
+
+
+def _capped(step: np.ndarray) -> np.ndarray:
+    """``step`` scaled down, if need be, to change no joint by more than ``MAX_STEP``."""
+    largest = float(np.abs(step).max())
+    if largest > MAX_STEP:
+        step *= MAX_STEP / largest
+    return step
+
+
 def _damped_step(
     rx: np.ndarray, ry: np.ndarray, ex: float, ey: float, damping: float
 ) -> np.ndarray:
@@ -330,11 +343,6 @@ def _escape_saddle(
     return best
 
 
-def _check_chain(skeleton: Skeleton) -> None:
-    if not skeleton.is_chain:
-        raise ValueError("this solver needs a serial chain (parents[i] == i - 1)")
-
-
 def _check_solve_inputs(
     skeleton: Skeleton,
     angles: object,
@@ -346,7 +354,7 @@ def _check_solve_inputs(
 
     The start is a new array, so a solver never changes the caller's angles.
     """
-    _check_chain(skeleton)
+    check_chain(skeleton)
     tol = _check_settings(max_iterations, tolerance)
     start = skeleton.clamp(check_angles(angles, skeleton.count))
     return start, check_point(target), tol

@@ -36,6 +36,13 @@ once per tick:
 A target beyond the chain's reach gets the chain stretched straight toward it at once, when the
 limits allow that pose (it is the closest any pose can come), with ``FAILURE``.
 
+:meth:`RobustSolver.solve_targets` is the same for a tree and a
+:class:`~ikgame.kinematics.targets.TargetSet`, with the multi-target solvers: the cache, the
+stall test (on the largest distance), the near restarts by damped least squares, then the middle
+of every joint's range and the random poses as far seeds; restarts are ranked by the weighted
+objective, so targets that cannot all be reached keep the best weighted compromise found. A
+chain with one target at its tip goes to :meth:`RobustSolver.solve`.
+
 Angles are radians, lengths and positions pixels.
 """
 
@@ -44,7 +51,7 @@ from __future__ import annotations
 import copy
 import math
 from collections import deque
-from collections.abc import Iterator, Mapping
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, replace
 from types import MappingProxyType
 from typing import Final
@@ -54,9 +61,11 @@ import numpy as np
 from ikgame.kinematics._floats import FloatChain
 from ikgame.kinematics.ccd import wrap_angle
 from ikgame.kinematics.jacobian import _chain_points, _check_settings, solve_dls
-from ikgame.kinematics.registry import get_solver
-from ikgame.kinematics.skeleton import Skeleton, check_angles, check_point
-from ikgame.kinematics.solver import Solution, Solver, SolveStatus
+from ikgame.kinematics.multi_jacobian import solve_dls_targets
+from ikgame.kinematics.registry import get_solver, get_target_solver
+from ikgame.kinematics.skeleton import Skeleton, check_angles, check_point, tree_points
+from ikgame.kinematics.solver import Solution, Solver, SolveStatus, TargetSolver
+from ikgame.kinematics.targets import TargetSet
 
 __all__ = [
     "RobustSolver",
@@ -123,19 +132,26 @@ FALLBACK: Final[Mapping[str, str]] = MappingProxyType(
 _TWO_PI: Final = 2.0 * math.pi
 
 
+_Goal = tuple[float, float] | tuple[tuple[int, ...], tuple[float, ...], tuple[float, ...]]
+"""A target as the cache compares it: a point (px), or a target set's links, points (flattened,
+px) and weights."""
+
+
 @dataclass(frozen=True, eq=False)
 class _Answer:
-    """A cached answer: its angles (read-only, and as floats), the target (px) and chain it was
+    """A cached answer: its angles (read-only, and as floats), the goal and skeleton frame it was
     solved for, its error (px) and status."""
 
     angles: np.ndarray
     listed: list[float]
-    target: tuple[float, float]
-    chain: FloatChain
+    target: _Goal
+    frame: object
+    """The ``RobustSolver._frame`` it was solved in: a new one whenever the skeleton changes."""
     error: float
     status: SolveStatus
     followed: bool
     """Found by a far restart: followed while it reaches, wherever the chain is on its way."""
+    errors: np.ndarray | None = None
 
 
 class RobustSolver:
@@ -165,16 +181,21 @@ class RobustSolver:
             raise ValueError(f"budget must be an integer >= 0 iterations, got {budget!r}")
         self.budget = int(budget)
         self._skeleton = skeleton
-        self._chain = FloatChain(skeleton)
+        self._chain = _float_chain(skeleton)
+        self._free: list[bool] = (~skeleton.limited).tolist()
+        self._frame = object()
         self._reach = skeleton.reach
         self._name = ""
         self._solve: Solver = get_solver(solver_name)
         self._fallback: Solver = self._solve
+        self._solve_targets: TargetSolver = get_target_solver(solver_name)
+        self._fallback_targets: TargetSolver = self._solve_targets
         self.solver_name = solver_name
 
     @property
     def skeleton(self) -> Skeleton:
-        """The chain being solved; set it when the base moves (the cache is checked against it)."""
+        """The chain or tree being solved; set it when the base moves (the cache is checked
+        against it)."""
         return self._skeleton
 
     @skeleton.setter
@@ -188,16 +209,22 @@ class RobustSolver:
         )
         self._skeleton = skeleton
         unmoved = skeleton.base_angle == old.base_angle and np.array_equal(skeleton.base, old.base)
+        same_shape = same_shape and (
+            skeleton.root_offsets is old.root_offsets
+            or np.array_equal(skeleton.root_offsets, old.root_offsets)
+        )
         if same_shape and unmoved:
             return
-        if same_shape:
+        self._frame = object()
+        if same_shape and self._chain is not None:
             # Only the base moved: the float copies of lengths and limits still hold.
             chain = copy.copy(self._chain)
             chain.base_x, chain.base_y = (float(v) for v in skeleton.base)
             chain.base_angle = skeleton.base_angle
             self._chain = chain
-        else:
-            self._chain = FloatChain(skeleton)
+        elif not same_shape:
+            self._chain = _float_chain(skeleton)
+            self._free = (~skeleton.limited).tolist()
             self._reach = skeleton.reach
             self.reset()
 
@@ -210,6 +237,8 @@ class RobustSolver:
     def solver_name(self, name: str) -> None:
         self._solve = get_solver(name)
         self._fallback = get_solver(FALLBACK[name])
+        self._solve_targets = get_target_solver(name)
+        self._fallback_targets = get_target_solver(FALLBACK[name])
         self._name = name
         self.reset()
 
@@ -218,7 +247,7 @@ class RobustSolver:
         self._answer: _Answer | None = None
         self._search: _Search | None = None
         self._quiet = 0
-        self._pending: tuple[float, float] | None = None
+        self._pending: _Goal | None = None
         self._waiting = 0
 
     def solve(
@@ -232,18 +261,21 @@ class RobustSolver:
         """Desired angles toward ``target`` (px), warm-started from the measured ``angles``.
 
         ``max_iterations`` bounds the plain solve; restarts add at most ``budget`` iterations;
-        ``Solution.iterations`` counts both. Answers that are cached come back read-only.
+        ``Solution.iterations`` counts both. Answers that are cached come back read-only. Needs
+        a chain with joint 0 on the base; see :meth:`solve_targets` for anything else.
         """
         tol = _check_settings(max_iterations, tolerance)
+        if self._chain is None:
+            raise ValueError("solve needs a chain with joint 0 on the base; use solve_targets")
         measured = _angles_list(angles, self._skeleton.count)
         goal = _point(target)
-        cached = self._cached(measured, goal, tol)
+        chain = self._chain
+        cached = self._cached(
+            measured, goal, tol, lambda listed: (math.sqrt(chain.error_sqr(listed, *goal)), None)
+        )
         if cached is not None:
             return cached
-        if goal == self._pending:
-            self._waiting += 1
-        else:
-            self._pending, self._waiting = goal, 0
+        self._count_calls(goal)
         stretched = self._stretched(goal, tol)
         if stretched is not None:
             return self._keep(stretched, goal, followed=False)
@@ -258,12 +290,114 @@ class RobustSolver:
                 search is not None and search.aims_at(np.array(goal), tol) and search.best_far
             )
             return self._keep(plain, goal, followed)
-        return self._recover(start, plain, goal, tol)
+        skeleton = self._skeleton
+        target = np.array(goal)
+        return self._recover(
+            plain,
+            goal,
+            target,
+            tol,
+            math.sqrt(chain.error_sqr(skeleton.clamp(start).tolist(), *goal)),
+            lambda angles: (_error(skeleton, angles, target), None),
+            lambda stalled: (
+                _near_seeds(skeleton, self._solve, stalled),
+                _far_seeds(skeleton, self._solve, self._fallback, stalled, target),
+            ),
+        )
+
+    def solve_targets(
+        self,
+        angles: np.ndarray,
+        targets: TargetSet,
+        *,
+        max_iterations: int = 10,
+        tolerance: float = 1.0,
+    ) -> Solution:
+        """Desired angles toward every target of ``targets``, warm-started from the measured
+        ``angles`` (radians): :meth:`solve` for a tree, with the multi-target solver.
+
+        ``Solution.error`` is the largest distance (px), ``Solution.errors`` each target's. A
+        chain with joint 0 on the base and one target at its tip gets :meth:`solve`'s answer.
+
+        >>> legs = Skeleton.tree([60, 50, 60, 50], [-1, 0, -1, 2],
+        ...                      limits=[(-2.6, -0.5), (-2.0, 0.0)] * 2,
+        ...                      root_offsets=[(-40, 0), (0, 0), (40, 0), (0, 0)])
+        >>> robust = RobustSolver(legs, "fabrik")
+        >>> feet = TargetSet(legs.effectors, [(-30.0, -100.0), (40.0, -100.0)])
+        >>> sol = robust.solve_targets(legs.clamp(np.zeros(4)), feet, tolerance=0.5)
+        >>> sol.status.value, bool(sol.errors.max() <= 0.5)
+        ('success', True)
+        >>> robust.solve_targets(sol.angles, feet, tolerance=0.5).iterations
+        0
+        """
+        if not isinstance(targets, TargetSet):
+            raise ValueError(f"targets must be a TargetSet, got {type(targets).__name__}")
+        skeleton = self._skeleton
+        targets.check(skeleton)
+        if (
+            self._chain is not None
+            and len(targets) == 1
+            and int(targets.links[0]) == skeleton.count - 1
+        ):
+            sol = self.solve(
+                angles, targets.points[0], max_iterations=max_iterations, tolerance=tolerance
+            )
+            return Solution(
+                sol.angles, sol.status, sol.iterations, sol.error, np.array([sol.error])
+            )
+        tol = _check_settings(max_iterations, tolerance)
+        measured = _angles_list(angles, skeleton.count)
+        goal = _goal_key(targets)
+
+        def measure(angles: np.ndarray | list[float]) -> tuple[float, np.ndarray]:
+            errors = _target_errors(skeleton, np.asarray(angles), targets)
+            return float(errors.max()), errors
+
+        cached = self._cached(measured, goal, tol, measure)
+        if cached is not None:
+            return cached
+        self._count_calls(goal)
+        start = np.array(measured)
+        plain = self._solve_targets(
+            skeleton, start, targets, max_iterations=max_iterations, tolerance=tol
+        )
+        if plain.status is SolveStatus.SUCCESS:
+            search = self._search
+            followed = search is not None and search.aims_at(targets, tol) and search.best_far
+            return self._keep(plain, goal, followed)
+        if _out_of_reach(skeleton, targets, tol):
+            # No restart brings a target closer than its branch stretched out: the plain solve
+            # already leans toward it (say, while the base still carries the skeleton there).
+            return plain
+        return self._recover(
+            plain,
+            goal,
+            targets,
+            tol,
+            measure(skeleton.clamp(start))[0],
+            measure,
+            lambda stalled: (
+                _near_seeds(skeleton, self._solve_targets, stalled, solve_dls_targets),
+                _far_tree_seeds(skeleton, self._solve_targets, self._fallback_targets),
+            ),
+        )
+
+    def _count_calls(self, goal: _Goal) -> None:
+        """Count the calls in a row with one and the same goal."""
+        if goal == self._pending:
+            self._waiting += 1
+        else:
+            self._pending, self._waiting = goal, 0
 
     def _cached(
-        self, measured: list[float], goal: tuple[float, float], tol: float
+        self,
+        measured: list[float],
+        goal: _Goal,
+        tol: float,
+        measure: Callable[[list[float]], tuple[float, np.ndarray | None]],
     ) -> Solution | None:
-        """The cached answer if it still serves, else None.
+        """The cached answer if it still serves, else None; ``measure(angles)`` gives a pose's
+        error and per-target errors for the goal, px.
 
         An answer a restart from a far seed found is followed while it reaches the goal and the
         chain is on its way there: solving from the measured pose half way could fall back into
@@ -276,19 +410,18 @@ class RobustSolver:
         answer = self._answer
         if answer is None:
             return None
-        chain = self._chain
-        same = answer.chain is chain and answer.target == goal
+        same = answer.frame is self._frame and answer.target == goal
         if same and answer.status is SolveStatus.FAILURE:
-            return Solution(answer.angles, SolveStatus.FAILURE, 0, answer.error)
+            return Solution(answer.angles, SolveStatus.FAILURE, 0, answer.error, answer.errors)
         if not answer.followed:
             return None
-        if _within(chain, measured, answer.listed):
+        if _within(self._free, measured, answer.listed):
             self._answer = replace(answer, followed=False)
             return None
-        error = answer.error if same else math.sqrt(chain.error_sqr(answer.listed, *goal))
+        error, errors = (answer.error, answer.errors) if same else measure(answer.listed)
         if error > tol:
             return None
-        return Solution(answer.angles, SolveStatus.SUCCESS, 0, error)
+        return Solution(answer.angles, SolveStatus.SUCCESS, 0, error, errors)
 
     def _stretched(self, goal: tuple[float, float], tol: float) -> Solution | None:
         """The chain stretched toward a goal at or beyond its reach, when the limits allow it."""
@@ -305,17 +438,26 @@ class RobustSolver:
         return Solution(stretched, status, 0, error)
 
     def _recover(
-        self, start: np.ndarray, plain: Solution, goal: tuple[float, float], tol: float
+        self,
+        plain: Solution,
+        goal: _Goal,
+        target: np.ndarray | TargetSet,
+        tol: float,
+        before: float,
+        measure: Callable[[np.ndarray], tuple[float, np.ndarray | None]],
+        seeds: Callable[[np.ndarray], tuple[_Seeds, _Seeds]],
     ) -> Solution:
-        """After a plain solve that fell short: search when it stalled, keep the best."""
+        """After a plain solve that fell short: search when it stalled, keep the best.
+
+        ``before`` is the error at the start (px); ``measure(angles)`` a pose's error and
+        per-target errors; ``seeds(stalled)`` the near and far restarts from a stalled pose.
+        """
         skeleton = self._skeleton
-        before = math.sqrt(self._chain.error_sqr(skeleton.clamp(start).tolist(), *goal))
         stalled = (
             plain.status is SolveStatus.FAILURE
             or before - plain.error < STALL_PROGRESS * before
             or self._waiting >= STALL_CALLS
         )
-        target = np.array(goal)
         search = self._search
         if search is not None and not search.aims_at(target, tol):
             # The target moved on before the search arrived: wait before the next one.
@@ -325,79 +467,104 @@ class RobustSolver:
             self._quiet = max(self._quiet - 1, 0)
             return plain
         if search is None:
-            search = self._search = _Search(
-                skeleton, self._solve, self._fallback, plain.angles, target, tol
-            )
+            search = self._search = _Search(*seeds(plain.angles), target, tol)
         # Far restarts only for a target that holds still: while it moves, an answer that
         # swings the chain round would be stale before the chain got there.
         search.far = self._waiting >= STILL_CALLS
         used = search.run(skeleton, target, tol, self.budget)
         best = plain
         if search.best is not None:
-            found_error = _error(skeleton, search.best, target)
-            if found_error < plain.error:
-                best = Solution(search.best, plain.status, 0, found_error)
+            found = Solution(search.best, plain.status, 0, *measure(search.best))
+            if search.score(found) < search.score(plain):
+                best = found
         iterations = plain.iterations + used
         if best.error <= tol or search.exhausted:
             status = SolveStatus.SUCCESS if best.error <= tol else SolveStatus.FAILURE
-            followed = best is not plain and search.best_far
-            return self._keep(Solution(best.angles, status, iterations, best.error), goal, followed)
-        return Solution(best.angles, SolveStatus.PROCESSING, iterations, best.error)
+            if status is SolveStatus.FAILURE:
+                # No pose reaches the goal from here; while the base carries the skeleton the
+                # cached failure serves no longer, and searching again every tick would cost the
+                # whole budget each time.
+                self._quiet = RETRY_CALLS
+            answer = Solution(best.angles, status, iterations, best.error, best.errors)
+            return self._keep(answer, goal, best is not plain and search.best_far)
+        return Solution(best.angles, SolveStatus.PROCESSING, iterations, best.error, best.errors)
 
-    def _keep(self, solution: Solution, goal: tuple[float, float], followed: bool) -> Solution:
+    def _keep(self, solution: Solution, goal: _Goal, followed: bool) -> Solution:
         """Cache ``solution`` (an arrival, or the best there is) and return it read-only."""
         # Every solver returns a new array, so it can be frozen and shared rather than copied.
         angles = solution.angles
         angles.setflags(write=False)
         self._answer = _Answer(
-            angles, angles.tolist(), goal, self._chain, solution.error, solution.status, followed
+            angles,
+            angles.tolist(),
+            goal,
+            self._frame,
+            solution.error,
+            solution.status,
+            followed,
+            solution.errors,
         )
         self._search = None
         return solution
 
 
+_Seeds = Iterator[tuple[np.ndarray, tuple[Solver | TargetSolver, ...]]]
+"""Start poses, each with the solvers to run from it one after the other."""
+
+
 class _Search:
-    """Restarts for one target, resumable from call to call; remembers the best pose found.
+    """Restarts for one target (a point, or a target set), resumable from call to call;
+    remembers the best pose found: the lowest error for a point, the lowest weighted objective
+    for a target set.
 
     The near seeds are always tried; the far ones only while ``far`` is set.
     """
 
     def __init__(
-        self,
-        skeleton: Skeleton,
-        solve: Solver,
-        fallback: Solver,
-        stalled: np.ndarray,
-        target: np.ndarray,
-        tolerance: float,
+        self, near: _Seeds, far: _Seeds, target: np.ndarray | TargetSet, tolerance: float
     ) -> None:
-        self.target = target.copy()
+        self.target = target.copy() if isinstance(target, np.ndarray) else target
         self.tolerance = tolerance
-        self.stalled = stalled
         self.far = False
         self.best: np.ndarray | None = None
         self.best_far = False
         self._best_error = math.inf
+        self._best_score = math.inf
         # Each entry: a start pose, the solvers still to run from it one after the other, and
         # whether it is a far seed.
-        self._queue: deque[tuple[np.ndarray, tuple[Solver, ...], bool]] = deque()
-        self._near: Iterator[tuple[np.ndarray, tuple[Solver, ...]]] | None = _near_seeds(
-            skeleton, solve, stalled
-        )
-        self._far: Iterator[tuple[np.ndarray, tuple[Solver, ...]]] | None = _far_seeds(
-            skeleton, solve, fallback, stalled, target
-        )
+        self._queue: deque[tuple[np.ndarray, tuple[Solver | TargetSolver, ...], bool]] = deque()
+        self._near: _Seeds | None = near
+        self._far: _Seeds | None = far
 
     @property
     def exhausted(self) -> bool:
         """True once every seed, far ones included, has been tried."""
         return not self._queue and self._near is None and self._far is None
 
-    def aims_at(self, goal: np.ndarray, tolerance: float) -> bool:
+    def aims_at(self, goal: np.ndarray | TargetSet, tolerance: float) -> bool:
         """Whether this search serves ``goal``: the same target, to within the tolerance."""
-        return tolerance == self.tolerance and math.hypot(*(goal - self.target)) <= tolerance
+        if tolerance != self.tolerance:
+            return False
+        target = self.target
+        if isinstance(target, np.ndarray):
+            return math.hypot(*(goal - target)) <= tolerance
+        return (
+            isinstance(goal, TargetSet)
+            and np.array_equal(goal.links, target.links)
+            and np.array_equal(goal.weights, target.weights)
+            and bool(np.all(np.hypot(*(goal.points - target.points).T) <= tolerance))
+        )
 
-    def run(self, skeleton: Skeleton, goal: np.ndarray, tolerance: float, budget: int) -> int:
+    def score(self, sol: Solution) -> float:
+        """How good an answer is, lower better: the error for a point, the weighted objective
+        (doubled) for a target set."""
+        if sol.errors is None or not isinstance(self.target, TargetSet):
+            return sol.error
+        return float(self.target.weights @ sol.errors**2)
+
+    def run(
+        self, skeleton: Skeleton, goal: np.ndarray | TargetSet, tolerance: float, budget: int
+    ) -> int:
         """Try seeds until one arrives, none are left, or ``budget`` iterations are spent."""
         used = 0
         while used < budget and self._best_error > tolerance:
@@ -412,14 +579,16 @@ class _Search:
                     return used
                 sol = solver(skeleton, angles, goal, max_iterations=allowed, tolerance=tolerance)
                 used += sol.iterations
-                if sol.error < self._best_error:
-                    self.best, self.best_far, self._best_error = sol.angles, far, sol.error
+                score = self.score(sol)
+                if score < self._best_score or sol.status is SolveStatus.SUCCESS:
+                    self.best, self.best_far = sol.angles, far
+                    self._best_error, self._best_score = sol.error, score
                 if sol.status is SolveStatus.SUCCESS:
                     return used
                 angles = sol.angles
         return used
 
-    def _next(self) -> tuple[np.ndarray, tuple[Solver, ...], bool] | None:
+    def _next(self) -> tuple[np.ndarray, tuple[Solver | TargetSolver, ...], bool] | None:
         if self._queue:
             return self._queue.popleft()
         if self._near is not None:
@@ -435,20 +604,48 @@ class _Search:
         return None
 
 
+def _out_of_reach(skeleton: Skeleton, targets: TargetSet, tol: float) -> bool:
+    """True when some target lies farther from its branch's root joint than the branch is long
+    (plus ``tol``, px)."""
+    roots = skeleton.root_points()[targets.links]
+    lengths = skeleton.ancestors[targets.links] @ skeleton.lengths
+    return bool(np.any(np.hypot(*(targets.points - roots).T) > lengths + tol))
+
+
 def _near_seeds(
-    skeleton: Skeleton, solve: Solver, stalled: np.ndarray
-) -> Iterator[tuple[np.ndarray, tuple[Solver, ...]]]:
-    """Restarts next to the stalled pose, by damped least squares: its steps are the shortest
-    that move the end effector, so it finds the answer nearest the pose (CCD would turn the last
-    joints first, whatever the distance)."""
-    if solve is not solve_dls:
-        yield stalled, (solve_dls,)
-    yield _backed_off(skeleton, stalled), (solve_dls,)
+    skeleton: Skeleton,
+    solve: Solver | TargetSolver,
+    stalled: np.ndarray,
+    dls: Solver | TargetSolver = solve_dls,
+) -> _Seeds:
+    """Restarts next to the stalled pose, by damped least squares (``dls``, the chain's or the
+    multi-target one): its steps are the shortest that move the end effector, so it finds the
+    answer nearest the pose (CCD would turn the last joints first, whatever the distance)."""
+    if solve is not dls:
+        yield stalled, (dls,)
+    yield _backed_off(skeleton, stalled), (dls,)
+
+
+def _far_tree_seeds(skeleton: Skeleton, solve: TargetSolver, fallback: TargetSolver) -> _Seeds:
+    """A tree's restarts elsewhere in the joints' ranges: the middle of every range, then the
+    random poses, each run by the solver then its fallback."""
+    both = (solve, fallback)
+    yield _middle(skeleton), both
+    yield from ((pose, both) for pose in _random_poses(skeleton))
+
+
+def _random_poses(skeleton: Skeleton) -> Iterator[np.ndarray]:
+    """``RANDOM_SEEDS`` poses within the limits (within [-pi, pi]), from a fresh generator."""
+    rng = np.random.default_rng(RANDOM_SEED)
+    low = np.maximum(skeleton.lower, -math.pi)
+    high = np.minimum(skeleton.upper, math.pi)
+    for _ in range(RANDOM_SEEDS):
+        yield rng.uniform(low, high)
 
 
 def _far_seeds(
     skeleton: Skeleton, solve: Solver, fallback: Solver, stalled: np.ndarray, target: np.ndarray
-) -> Iterator[tuple[np.ndarray, tuple[Solver, ...]]]:
+) -> _Seeds:
     """Restarts elsewhere in the joints' ranges, each run by the solver then its fallback."""
     both = (solve, fallback)
     points = _chain_points(skeleton, stalled)
@@ -465,11 +662,8 @@ def _far_seeds(
     yield _aimed(skeleton, skeleton.clamp(bends_reversed), target), both
     yield _stretched_toward(skeleton, target), both
     yield _aimed(skeleton, _middle(skeleton), target), both
-    rng = np.random.default_rng(RANDOM_SEED)
-    low = np.maximum(skeleton.lower, -math.pi)
-    high = np.minimum(skeleton.upper, math.pi)
-    for _ in range(RANDOM_SEEDS):
-        yield _aimed(skeleton, rng.uniform(low, high), target), both
+    for pose in _random_poses(skeleton):
+        yield _aimed(skeleton, pose, target), both
 
 
 def _the_other_way_round(
@@ -563,10 +757,10 @@ def _point(point: object) -> tuple[float, float]:
     return x, y
 
 
-def _within(chain: FloatChain, measured: list[float], answer: list[float]) -> bool:
+def _within(free_joints: list[bool], measured: list[float], answer: list[float]) -> bool:
     """Whether every joint of ``measured`` is within ``SETTLED`` of ``answer`` (a free joint the
     short way round)."""
-    for m, a, free in zip(measured, answer, chain.free, strict=True):
+    for m, a, free in zip(measured, answer, free_joints, strict=True):
         gap = abs(m - a)
         if gap > SETTLED and not (free and abs(wrap_angle(m - a)) <= SETTLED):
             return False
@@ -576,3 +770,24 @@ def _within(chain: FloatChain, measured: list[float], answer: list[float]) -> bo
 def _error(skeleton: Skeleton, angles: np.ndarray, target: np.ndarray) -> float:
     end = _chain_points(skeleton, angles)[-1]
     return math.hypot(float(end[0] - target[0]), float(end[1] - target[1]))
+
+
+def _float_chain(skeleton: Skeleton) -> FloatChain | None:
+    """The chain as floats for :meth:`RobustSolver.solve`, or None for a tree or a chain whose
+    joint 0 sits off the base (only :meth:`RobustSolver.solve_targets` takes those)."""
+    return FloatChain(skeleton) if skeleton.is_chain and not skeleton.has_root_offsets else None
+
+
+def _goal_key(targets: TargetSet) -> _Goal:
+    """A target set as the cache compares it."""
+    return (
+        tuple(targets.links.tolist()),
+        tuple(targets.points.ravel().tolist()),
+        tuple(targets.weights.tolist()),
+    )
+
+
+def _target_errors(skeleton: Skeleton, angles: np.ndarray, targets: TargetSet) -> np.ndarray:
+    """(k,) distance from each targeted end to its target, px."""
+    ends = tree_points(skeleton, angles, skeleton.root_points())[1][targets.links]
+    return np.hypot(*(ends - targets.points).T)

@@ -2,20 +2,24 @@
 
 A solver is a free function ``solve(skeleton, angles, target, *, max_iterations, tolerance)``
 that starts from ``angles`` (radians, warm start) and returns a :class:`Solution` whose angles
-respect the skeleton's joint limits.
+respect the skeleton's joint limits. A multi-target solver takes a
+:class:`~ikgame.kinematics.targets.TargetSet` in place of the one target point.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 from enum import Enum
-from typing import Protocol
+from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
 from ikgame.kinematics.skeleton import Skeleton
 
-__all__ = ["SolveStatus", "Solution", "Solver"]
+if TYPE_CHECKING:
+    from ikgame.kinematics.targets import TargetSet
+
+__all__ = ["SolveStatus", "Solution", "Solver", "TargetSolver"]
 
 
 class SolveStatus(Enum):
@@ -44,13 +48,17 @@ class Solution:
         angles: (n,) desired local joint angles, radians, within the joint limits.
         status: where the solve ended.
         iterations: iterations used.
-        error: distance from the end effector to the target at ``angles``, px.
+        error: distance from the end effector to the target at ``angles``, px; for several
+            targets, the largest distance over the targeted effectors.
+        errors: (k,) distance from each targeted effector to its target, px, in the order of
+            the :class:`~ikgame.kinematics.targets.TargetSet`; None from the chain solvers.
     """
 
     angles: np.ndarray
     status: SolveStatus
     iterations: int
     error: float
+    errors: np.ndarray | None = None
 
 
 class Solver(Protocol):
@@ -61,6 +69,21 @@ class Solver(Protocol):
         skeleton: Skeleton,
         angles: np.ndarray,
         target: np.ndarray,
+        *,
+        max_iterations: int = ...,
+        tolerance: float = ...,
+    ) -> Solution: ...
+
+
+class TargetSolver(Protocol):
+    """The signature of every multi-target solver (``solve_ccd_targets`` ...): a
+    :class:`~ikgame.kinematics.targets.TargetSet` instead of one point."""
+
+    def __call__(
+        self,
+        skeleton: Skeleton,
+        angles: np.ndarray,
+        targets: TargetSet,
         *,
         max_iterations: int = ...,
         tolerance: float = ...,

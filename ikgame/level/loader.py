@@ -23,7 +23,7 @@ from typing import Final
 from pydantic import ValidationError
 
 from ikgame.level.library import ASSETS_DIR, THEMES_DIR
-from ikgame.level.model import FOLLOW_SHAPES, Level
+from ikgame.level.model import FOLLOW_SHAPES, KEY_PATTERN, Level
 
 __all__ = [
     "LevelError",
@@ -163,9 +163,10 @@ def sprite_fields(level: Level) -> list[tuple[tuple[str | int, ...], str]]:
     (('chain', 'links', 0, 'sprite'), 'sprites/upper_arm.png')
     """
     fields: list[tuple[tuple[str | int, ...], str]] = []
-    for i, link in enumerate(level.chain.links):
+    chain = level.chain
+    for i, link in enumerate(chain.entries):
         if link.sprite is not None:
-            fields.append((("chain", "links", i, "sprite"), link.sprite))
+            fields.append((("chain", chain.entry_field, i, "sprite"), link.sprite))
     for i, prop in enumerate(level.props):
         if prop.sprite is not None:
             fields.append((("props", i, "sprite"), prop.sprite))
@@ -451,11 +452,16 @@ def _escaped(text: str, at: int) -> bool:
 
 def _without_tags(loc: tuple[object, ...]) -> tuple[object, ...]:
     """Drop the union tags pydantic puts in a path: ``script[0].reach.hold`` is
-    ``script[0].hold``, and ``script[0].follow.circle.radius`` is ``script[0].radius``."""
+    ``script[0].hold``, ``script[0].follow.circle.radius`` is ``script[0].radius``, and
+    ``script[0].reach.reach.table.left`` (a point or a table) is ``script[0].reach.left``; a
+    dict key's own marker goes too."""
+    loc = tuple(part for part in loc if part != "[key]")
     if len(loc) > 2 and loc[0] in _TAGGED and isinstance(loc[1], int) and loc[2] in _TAGS:
         rest = loc[3:]
         if loc[2] == "follow" and rest and rest[0] in FOLLOW_SHAPES:
             rest = rest[1:]
+        if loc[2] == "reach" and rest[:1] == ("reach",) and rest[1:2] in (("point",), ("table",)):
+            rest = rest[:1] + rest[2:]
         return loc[:2] + rest
     return loc
 
@@ -478,11 +484,15 @@ def _message(err: dict) -> str:
         loc = err["loc"]
         if len(loc) == 5 and loc[2] == "follow" and loc[3] in FOLLOW_SHAPES:
             return _follow_key_message(loc[3], str(loc[4]))
+        if loc[2:] == ("reach", "effector"):
+            return "a reach step names its effectors in a table: reach = { name = [x, y] }"
         return "unknown key (check the spelling; see docs/levels.md)"
     if kind == "missing" and isinstance(err["loc"][-1], int):
         return "too few values"
     if kind in ("missing", "union_tag_not_found"):
         return "Field required"
+    if kind == "string_pattern_mismatch" and err["ctx"]["pattern"] == KEY_PATTERN:
+        return f"must be letters, digits, '_' and '-' only (got {err['input']!r})"
     if kind == "string_pattern_mismatch":
         return f"must be printable text, without control characters (got {err['input']!r})"
     if kind == "union_tag_invalid":

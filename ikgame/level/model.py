@@ -13,6 +13,8 @@ from __future__ import annotations
 
 import math
 import re
+import weakref
+from dataclasses import dataclass, fields
 from typing import Annotated, Any, Final, Literal
 
 from pydantic import (
@@ -48,6 +50,11 @@ __all__ = [
     "WorldConfig",
     "ChainConfig",
     "LinkConfig",
+    "BoneConfig",
+    "Link",
+    "GaitConfig",
+    "CHAIN_EFFECTOR",
+    "KEY_PATTERN",
     "SegmentObstacle",
     "CircleObstacle",
     "BallProp",
@@ -69,7 +76,7 @@ __all__ = [
 ]
 
 MAX_LINKS: Final = 200
-"""Links in one chain, after ``repeat`` is expanded."""
+"""Links in one chain or tree, after ``repeat`` is expanded."""
 MAX_DURATION: Final = 600.0
 """Simulated seconds in one level."""
 MAX_STEPS: Final = 500
@@ -104,8 +111,13 @@ MIN_TICKS_PER_TURN: Final = 8
 rather than a few points jumping about; a base move needs as many ticks to accelerate the chain
 rather than teleport its pivot (which the joint solver answers with unbounded impulses)."""
 
+CHAIN_EFFECTOR: Final = "tip"
+"""The name of a chain's one effector, the tip of its last link."""
+
 # Printable text only: a level's names end up in terminals and pictures.
 _NAME_PATTERN: Final = r"^[^\x00-\x1f\x7f]*$"
+# Bone names are TOML bare keys, so that ``reach = { left = [x, y] }`` needs no quotes.
+KEY_PATTERN: Final = r"^[A-Za-z0-9_-]+$"
 _TEXT_PATTERN: Final = r"^[^\x00-\x09\x0b-\x1f\x7f]*$"
 _THEME_NAME: Final = re.compile(r"^[A-Za-z0-9_-]+$")
 
@@ -122,6 +134,7 @@ Friction = Annotated[float, Field(ge=0, le=10, allow_inf_nan=False)]
 Tolerance = Annotated[float, Field(gt=0, le=1000, allow_inf_nan=False)]
 Gain = Annotated[float, Field(gt=0, le=1000, allow_inf_nan=False)]
 Name = Annotated[str, Field(min_length=1, max_length=40, pattern=_NAME_PATTERN)]
+BoneName = Annotated[str, Field(min_length=1, max_length=40, pattern=KEY_PATTERN)]
 
 
 def _invalid(loc: tuple[str | int, ...], message: str, value: object) -> ValidationError:
@@ -286,6 +299,11 @@ def _check_region(region: tuple[float, float, float, float], field: str) -> None
         )
 
 
+def _radians(limits: tuple[float, float] | None) -> tuple[float, float] | None:
+    """Joint limits in radians, or None."""
+    return None if limits is None else (math.radians(limits[0]), math.radians(limits[1]))
+
+
 class LinkConfig(_Model):
     """[[chain.links]]: one link (or `repeat` identical links) and its joint."""
 
@@ -301,7 +319,7 @@ class LinkConfig(_Model):
         5.0e7, gt=0, le=1e15, allow_inf_nan=False, description="Motor torque limit (mass px^2/s^2)."
     )
     max_speed: float = Field(
-        360.0, gt=0, le=36000, allow_inf_nan=False, description="Motor speed limit, deg/s."
+        360.0, ge=0.01, le=36000, allow_inf_nan=False, description="Motor speed limit, deg/s."
     )
     repeat: int = Field(1, ge=1, le=MAX_LINKS, description="Use this link this many times.")
     sprite: SpritePath | None = _sprite_field(
@@ -324,13 +342,138 @@ class LinkConfig(_Model):
     @property
     def limits_rad(self) -> tuple[float, float] | None:
         """Joint limits in radians, or None."""
-        if self.limits is None:
-            return None
-        return (math.radians(self.limits[0]), math.radians(self.limits[1]))
+        return _radians(self.limits)
+
+
+class _BoneFields(_Model):
+    """What a bone adds to a link: its place in the tree and its effector (listed first)."""
+
+    name: BoneName = Field(
+        description="Unique name: children name it as their "
+        "`parent`, the script names its tip as an effector."
+    )
+    parent: BoneName | None = Field(
+        None,
+        description="The bone this one hangs from (listed before it); none: a root, hanging "
+        "from the base.",
+    )
+    at: Vec2 = Field(
+        (0.0, 0.0),
+        description="Roots only: where the root's joint sits on the base, px in the base's "
+        "frame (x along chain.angle, y to its left); every root gives it when there are several.",
+    )
+    angle: Degrees = Field(
+        0.0,
+        description="Start angle relative to the parent bone (a root: to chain.angle), degrees, "
+        "within the limits (the default 0 is clipped into them).",
+    )
+    effector: bool | None = Field(
+        None,
+        description="Whether the bone's tip is an effector the script can name; default: true "
+        "for a bone without children.",
+    )
+    weight: float = Field(
+        1.0,
+        gt=0,
+        le=1000,
+        allow_inf_nan=False,
+        description="The effector's weight when its target and the others' cannot all be "
+        "reached (effectors only).",
+    )
+
+
+class BoneConfig(LinkConfig, _BoneFields):
+    """[[chain.bones]]: one named bone of a tree (or `repeat` identical bones in a row) and its
+    joint; every key of a link, and where the bone hangs."""
+
+    repeat: int = Field(
+        1,
+        ge=1,
+        le=MAX_LINKS,
+        description="Use this bone this many times in a row; its children and its effector "
+        "sit at the last one's tip.",
+    )
+
+    @model_validator(mode="after")
+    def _angle_within_limits(self) -> BoneConfig:
+        if "angle" in self.model_fields_set and self.limits is not None:
+            low, high = self.limits
+            if not low <= self.angle <= high:
+                raise _invalid(
+                    ("angle",),
+                    f"{self.angle:g} is outside the bone's limits {list(self.limits)}",
+                    self.angle,
+                )
+        return self
+
+
+@dataclass(frozen=True)
+class Link:
+    """One physical link as the world builds it: an entry of ``[[chain.links]]`` or
+    ``[[chain.bones]]`` with its ``repeat`` expanded (:attr:`ChainConfig.expanded_links`).
+
+    ``name``: ``link1``, ``link2`` ... in a chain; a bone's name in a tree (the first links of a
+    repeated bone are ``name.1``, ``name.2`` ..., its last is ``name``). ``parent_index``: the
+    index of the link it hangs from, -1 for a root (on the base). ``source``: the index of its
+    entry in ``chain.links`` or ``chain.bones``. ``at`` (px, base frame; roots only, else zero),
+    ``angle`` (start angle relative to the parent, degrees, unclipped), ``effector`` (its tip is
+    an effector), ``weight`` (that effector's weight); the rest as in :class:`LinkConfig`.
+
+    >>> link = ChainConfig(links=[{"length": 40.0, "limits": (-90.0, 90.0)}]).expanded_links[0]
+    >>> link.name, link.parent_index, link.effector, link.limits_rad[1] == math.pi / 2
+    ('link1', -1, True, True)
+    """
+
+    name: str
+    parent_index: int
+    source: int
+    length: float
+    mass: float
+    width: float
+    limits: tuple[float, float] | None
+    max_torque: float
+    max_speed: float
+    sprite: str | None
+    sprite_pivot: tuple[float, float]
+    sprite_scale: float | None
+    at: tuple[float, float] = (0.0, 0.0)
+    angle: float = 0.0
+    effector: bool = False
+    weight: float = 1.0
+
+    @property
+    def limits_rad(self) -> tuple[float, float] | None:
+        """Joint limits in radians, or None."""
+        return _radians(self.limits)
+
+
+_LINK_FIELDS: Final = tuple(f.name for f in fields(Link) if f.name in LinkConfig.model_fields)
+
+
+def _link(entry: LinkConfig, name: str, parent: int, source: int, **tree: Any) -> Link:
+    return Link(
+        name=name,
+        parent_index=parent,
+        source=source,
+        **{key: getattr(entry, key) for key in _LINK_FIELDS},
+        **tree,
+    )
+
+
+def _listing(names: list[str] | tuple[str, ...], most: int = 10) -> str:
+    """Names for a message: ``'a', 'b'``, the first ``most`` of a long list, 'none' for none."""
+    shown = ", ".join(repr(n) for n in names[:most])
+    return (shown + ", ..." if len(names) > most else shown) or "none"
 
 
 class ChainConfig(_Model):
-    """[chain]: where the chain is mounted, how it is controlled, and its links."""
+    """[chain]: where the chain or tree is mounted, how it is controlled, and its links or
+    bones."""
+
+    # The schema says what the validator checks: exactly one of links and bones.
+    model_config = ConfigDict(
+        json_schema_extra={"oneOf": [{"required": ["links"]}, {"required": ["bones"]}]}
+    )
 
     base: Vec2 = Field((0.0, 0.0), description="Base position, px.")
     angle: Degrees = Field(90.0, description="Direction of the base mount, degrees (90 = up).")
@@ -340,43 +483,279 @@ class ChainConfig(_Model):
         0.5, ge=0, le=1000, allow_inf_nan=False, description="Solver arrival distance, px."
     )
     gain: Gain = Field(12.0, description="Joint servo gain, 1/s: motor rate = gain x angle error.")
-    links: list[LinkConfig] = Field(
-        min_length=1, max_length=MAX_LINKS, description="The links, base first."
+    links: list[LinkConfig] | None = Field(
+        None,
+        min_length=1,
+        max_length=MAX_LINKS,
+        description="The links of a chain, base first (give links or bones).",
+    )
+    bones: list[BoneConfig] | None = Field(
+        None,
+        min_length=1,
+        max_length=MAX_LINKS,
+        description="The bones of a tree, each parent before its children (give links or bones).",
+    )
+    branches_collide: bool = Field(
+        False,
+        description="Bones of different branches collide with each other (a bone never collides "
+        "with its ancestors, descendants or siblings); trees only.",
     )
 
     @model_validator(mode="after")
-    def _link_count(self) -> ChainConfig:
-        total = sum(link.repeat for link in self.links)
+    def _links_or_bones(self) -> ChainConfig:
+        if self.links is None and self.bones is None:
+            raise _invalid(
+                ("links",),
+                "give the chain its [[chain.links]] (a chain) or its [[chain.bones]] (a tree)",
+                None,
+            )
+        if self.links is not None and self.bones is not None:
+            raise _invalid(
+                ("bones",),
+                "give [[chain.links]] (a chain) or [[chain.bones]] (a tree), not both",
+                None,
+            )
+        field, noun = self.entry_field, "tree" if self.bones else "chain"
+        total = sum(entry.repeat for entry in self.entries)
         if total > MAX_LINKS:
             raise _invalid(
-                ("links",), f"a chain has at most {MAX_LINKS} links, this one has {total}", total
+                (field,), f"a {noun} has at most {MAX_LINKS} links, this one has {total}", total
             )
-        for i, (before, link) in enumerate(zip(self.links, self.links[1:], strict=False), start=1):
+        if self.bones is None and self.branches_collide:
+            raise _invalid(
+                ("branches_collide",), "a chain of links has no branches: give bones", True
+            )
+        if self.bones is not None:
+            _check_bones(self.bones)
+        links = self.expanded_links
+        far: list[float] = []  # px from the base to each link's tip, along the links
+        for link in links:
+            if link.parent_index < 0:
+                far.append(math.hypot(*link.at) + link.length)
+                continue
+            far.append(far[link.parent_index] + link.length)
+            before = links[link.parent_index]
             ratio = max(before.mass, link.mass) / min(before.mass, link.mass)
             if ratio > MAX_MASS_RATIO:
+                whose = (
+                    "the link before it" if self.bones is None else f"its parent {before.name!r}"
+                )
                 raise _invalid(
-                    ("links", i, "mass"),
+                    (field, link.source, "mass"),
                     f"{link.mass:g} is {ratio:.3g} times {'more' if link.mass > before.mass else 'less'} "
-                    f"than the mass of the link before it ({before.mass:g}); joined links may "
+                    f"than the mass of {whose} ({before.mass:g}); joined links may "
                     f"differ at most {MAX_MASS_RATIO:g} times, beyond that the physics cannot "
                     "hold the joint between them and blows up",
                     link.mass,
                 )
-        reach = sum(link.length * link.repeat for link in self.links)
+        reach = max(far)
         if reach > MAX_COORD:
             # Every coordinate is within MAX_COORD; a longer chain would reach where the
             # physics counts a body as blown up.
-            raise _invalid(
-                ("links",),
-                f"the links add up to {reach:g} px; at most {MAX_COORD:g} (shorten the links)",
-                reach,
+            what = (
+                f"the links add up to {reach:g} px"
+                if self.bones is None
+                else f"the longest way from the base to a tip is {reach:g} px"
             )
+            raise _invalid((field,), f"{what}; at most {MAX_COORD:g} (shorten the {field})", reach)
         return self
 
     @property
-    def expanded_links(self) -> tuple[LinkConfig, ...]:
-        """One entry per physical link, ``repeat`` expanded."""
-        return tuple(link for link in self.links for _ in range(link.repeat))
+    def entry_field(self) -> Literal["links", "bones"]:
+        """The key the file lists its parts under: ``"links"`` (a chain) or ``"bones"``."""
+        return "links" if self.bones is None else "bones"
+
+    @property
+    def entries(self) -> list[LinkConfig]:
+        """The entries as the file lists them (``chain.links`` or ``chain.bones``)."""
+        return self.links if self.bones is None else self.bones
+
+    @property
+    def expanded_links(self) -> tuple[Link, ...]:
+        """One entry per physical link, ``repeat`` expanded, each parent before its children.
+
+        >>> chain = ChainConfig(bones=[{"name": "hip", "length": 30.0},
+        ...     {"name": "leg", "parent": "hip", "length": 20.0, "repeat": 2}])
+        >>> [(link.name, link.parent_index, link.effector) for link in chain.expanded_links]
+        [('hip', -1, False), ('leg.1', 0, False), ('leg', 1, True)]
+        """
+        links = _EXPANDED.get(id(self))
+        if links is None:
+            links = _EXPANDED[id(self)] = self._expand()
+            weakref.finalize(self, _EXPANDED.pop, id(self), None)
+        return links
+
+    def _expand(self) -> tuple[Link, ...]:
+        if self.bones is None:
+            count = sum(entry.repeat for entry in self.links)
+            links: list[Link] = []
+            for source, entry in enumerate(self.links):
+                for _ in range(entry.repeat):
+                    k = len(links)
+                    links.append(
+                        _link(entry, f"link{k + 1}", k - 1, source, effector=k == count - 1)
+                    )
+            return tuple(links)
+        parents = {bone.parent for bone in self.bones}
+        tips: dict[str, int] = {}
+        links = []
+        for source, bone in enumerate(self.bones):
+            parent = -1 if bone.parent is None else tips[bone.parent]
+            effector = bone.name not in parents if bone.effector is None else bone.effector
+            for k in range(1, bone.repeat + 1):
+                last = k == bone.repeat
+                links.append(
+                    _link(
+                        bone,
+                        bone.name if last else f"{bone.name}.{k}",
+                        parent,
+                        source,
+                        at=bone.at if parent < 0 else (0.0, 0.0),
+                        angle=bone.angle,
+                        effector=effector and last,
+                        weight=bone.weight,
+                    )
+                )
+                parent = len(links) - 1
+            tips[bone.name] = parent
+        return tuple(links)
+
+    @property
+    def effector_names(self) -> tuple[str, ...]:
+        """The effectors' names in link order: ``("tip",)`` for a chain, bone names in a tree.
+
+        >>> ChainConfig(links=[{"length": 10.0, "repeat": 3}]).effector_names
+        ('tip',)
+        """
+        if self.bones is None:
+            return (CHAIN_EFFECTOR,)
+        return tuple(link.name for link in self.expanded_links if link.effector)
+
+    @property
+    def effector_links(self) -> tuple[int, ...]:
+        """The index of each effector's link, in the order of :attr:`effector_names`.
+
+        >>> ChainConfig(links=[{"length": 10.0, "repeat": 3}]).effector_links
+        (2,)
+        """
+        return tuple(i for i, link in enumerate(self.expanded_links) if link.effector)
+
+    def start_segments(self) -> tuple[tuple[tuple[float, float], tuple[float, float]], ...]:
+        """Where each link lies when the run starts, as (joint, tip) in world px: every joint at
+        its start angle (0, or a bone's ``angle``) clipped into its limits.
+
+        >>> ChainConfig(angle=0.0, links=[{"length": 10.0, "repeat": 2}]).start_segments()[1]
+        ((10.0, 0.0), (20.0, 0.0))
+        """
+        base = math.radians(self.angle)
+        cos, sin = math.cos(base), math.sin(base)
+        angles: list[float] = []
+        out: list[tuple[tuple[float, float], tuple[float, float]]] = []
+        for link in self.expanded_links:
+            start = link.angle
+            if link.limits is not None:
+                start = min(max(start, link.limits[0]), link.limits[1])
+            if link.parent_index < 0:
+                x, y = link.at
+                joint = (self.base[0] + x * cos - y * sin, self.base[1] + x * sin + y * cos)
+                angle = base + math.radians(start)
+            else:
+                joint = out[link.parent_index][1]
+                angle = angles[link.parent_index] + math.radians(start)
+            angles.append(angle)
+            out.append(
+                (
+                    joint,
+                    (
+                        joint[0] + link.length * math.cos(angle),
+                        joint[1] + link.length * math.sin(angle),
+                    ),
+                )
+            )
+        return tuple(out)
+
+
+_EXPANDED: Final[dict[int, tuple[Link, ...]]] = {}
+"""Each live chain's expanded links, by the chain's id: a chain is frozen, so they never change
+(``model_copy`` makes a new object), and the world and controller may ask for them often. Not in
+the instance's ``__dict__``, which ``model_copy`` would carry over to a changed copy."""
+
+
+def _check_bones(bones: list[BoneConfig]) -> None:
+    """The tree's shape: unique names, each parent listed before its children, several roots
+    each placed with ``at``, ``weight`` on effectors only, and at least one effector."""
+    first: dict[str, BoneConfig] = {}
+    for bone in bones:
+        first.setdefault(bone.name, bone)
+    seen: dict[str, int] = {}
+    for i, bone in enumerate(bones):
+        if bone.name in seen:
+            raise _invalid(
+                ("bones", i, "name"),
+                f"another bone is already named {bone.name!r} (chain.bones[{seen[bone.name]}])",
+                bone.name,
+            )
+        if bone.parent is not None and bone.parent not in seen:
+            raise _invalid(("bones", i, "parent"), _parent_problem(bones, i, first), bone.parent)
+        if bone.parent is not None and "at" in bone.model_fields_set:
+            raise _invalid(
+                ("bones", i, "at"),
+                "only applies to a root (a bone without parent): a child's joint is at its "
+                "parent's tip",
+                list(bone.at),
+            )
+        seen[bone.name] = i
+    roots = [i for i, bone in enumerate(bones) if bone.parent is None]
+    # A second root is more often a child that lost its parent than the first root is.
+    for i in roots[1:] + roots[:1] if len(roots) > 1 else ():
+        if "at" not in bones[i].model_fields_set:
+            other = bones[roots[1] if i == roots[0] else roots[0]].name
+            raise _invalid(
+                ("bones", i),
+                f"bone {bones[i].name!r} has no parent, like {other!r}: a tree may have several "
+                "roots (legs on a body), each placed on the base with `at`; give this bone "
+                "`at = [x, y]`, or the `parent` it hangs from",
+                None,
+            )
+    parents = {bone.parent for bone in bones}
+    effectors = 0
+    for i, bone in enumerate(bones):
+        effector = bone.name not in parents if bone.effector is None else bone.effector
+        if not effector and "weight" in bone.model_fields_set:
+            raise _invalid(
+                ("bones", i, "weight"),
+                "only applies to an effector (a bone without children, or with effector = true)",
+                bone.weight,
+            )
+        effectors += effector
+    if not effectors:
+        raise _invalid(
+            ("bones",),
+            "no bone is an effector (each bone without children says effector = false), so the "
+            "script could move nothing",
+            None,
+        )
+
+
+def _parent_problem(bones: list[BoneConfig], i: int, first: dict[str, BoneConfig]) -> str:
+    """Why bone ``i``'s parent is not a bone listed before it."""
+    bone = bones[i]
+    if bone.parent == bone.name:
+        return "a bone cannot hang from itself"
+    if bone.parent not in first:
+        return f"no bone is named {bone.parent!r} (bones: {_listing(list(first))})"
+    path, name = [bone.name], bone.parent
+    while name is not None and name in first and name not in path:
+        path.append(name)
+        name = first[name].parent
+    if name == bone.name:
+        cycle = " -> ".join([*path, bone.name])
+        return f"the bones hang from each other in a cycle ({cycle}); every bone must lead back to the base"
+    later = next(j for j, b in enumerate(bones) if b.name == bone.parent)
+    return (
+        f"{bone.parent!r} is listed after this bone (chain.bones[{later}]); list each parent "
+        "before its children"
+    )
 
 
 class SegmentObstacle(_Model):
@@ -477,15 +856,63 @@ class Goal(_Model):
         return self
 
 
-class ReachStep(_Model):
-    """[[script]] with reach: move the end effector to a point and hold it there."""
+def _reach_kind(value: object) -> str:
+    return "table" if isinstance(value, dict) else "point"
 
-    reach: Vec2 = Field(description="Target point, px.")
+
+Reach = Annotated[
+    Annotated[Vec2, Tag("point")]
+    | Annotated[dict[BoneName, Vec2], Field(min_length=1, max_length=MAX_LINKS), Tag("table")],
+    Discriminator(_reach_kind),
+]
+
+
+class ReachStep(_Model):
+    """[[script]] with reach: move the end effector to a point (or several effectors, each to
+    its point) and hold it there."""
+
+    reach: Reach = Field(
+        description="Target point [x, y], px; or a table of effector name = [x, y] that moves "
+        "several effectors at once."
+    )
     tolerance: Tolerance = Field(6.0, description="Distance that counts as reached, px.")
     hold: float = Field(
         0.5, ge=0, le=MAX_DURATION, allow_inf_nan=False, description="Time within tolerance, s."
     )
     timeout: Seconds = Field(4.0, description="Time before the step fails, s.")
+
+    def targets(self, default: str | None) -> dict[str, tuple[float, float]]:
+        """The point each effector aims at, px: the table as written, or the point for the
+        ``default`` effector (None when there is no default: a chain of several effectors).
+
+        >>> ReachStep(reach=(1, 2)).targets("tip")
+        {'tip': (1.0, 2.0)}
+        """
+        if isinstance(self.reach, dict):
+            return dict(self.reach)
+        if default is None:
+            raise ValueError(
+                "a reach to a point moves the only effector, and this chain has several; "
+                "name them: reach = { name = [x, y] }"
+            )
+        return {default: self.reach}
+
+    @property
+    def points(self) -> tuple[tuple[float, float], ...]:
+        """Every target point of the step, px (one for a point, one per effector for a table).
+
+        >>> ReachStep(reach={"a": (1, 2), "b": (3, 4)}).points
+        ((1.0, 2.0), (3.0, 4.0))
+        """
+        return tuple(self.reach.values()) if isinstance(self.reach, dict) else (self.reach,)
+
+
+def _effector_field(what: str) -> Any:
+    return Field(
+        None,
+        description=f"The effector that {what}; default: the only one (name it when the chain "
+        "has several).",
+    )
 
 
 class _Follow(_Model):
@@ -504,6 +931,7 @@ class _Follow(_Model):
         description="Time aiming at the path's start before the target moves and scoring "
         "begins, s.",
     )
+    effector: BoneName | None = _effector_field("follows the path")
 
 
 class FollowLine(_Follow):
@@ -607,7 +1035,7 @@ class WaitStep(_Model):
 
 
 class SetChanges(_Model):
-    """The changes of a set step; give at least one of gravity, solver, gain, base."""
+    """The changes of a set step; give at least one of gravity, solver, gain, base, angle."""
 
     gravity: Vec2 | None = Field(None, description="New gravity, px/s^2.")
     solver: SolverName | None = Field(None, description="New IK solver.")
@@ -615,16 +1043,28 @@ class SetChanges(_Model):
     base: Vec2 | None = Field(
         None, description="Where the chain's base moves to (smoothly, over `over` s), px."
     )
-    over: Seconds = Field(1.0, description="Time the base takes to move, s (with base only).")
+    angle: Degrees | None = Field(
+        None,
+        description="The base's new direction, degrees (as chain.angle: it turns smoothly, "
+        "over `over` s, the shorter way round).",
+    )
+    over: Seconds = Field(
+        1.0, description="Time the base takes to move or turn, s (with base or angle only)."
+    )
 
     @model_validator(mode="after")
     def _something_changes(self) -> SetChanges:
         given = self.model_fields_set
-        if not given & {"gravity", "solver", "gain", "base"}:
-            raise ValueError("give at least one of gravity, solver, gain, base")
-        if "over" in given and self.base is None:
-            raise _invalid(("over",), "only applies with base", self.over)
+        if not given & {"gravity", "solver", "gain", "base", "angle"}:
+            raise ValueError("give at least one of gravity, solver, gain, base, angle")
+        if "over" in given and self.base is None and self.angle is None:
+            raise _invalid(("over",), "only applies with base or angle", self.over)
         return self
+
+    @property
+    def moves_base(self) -> bool:
+        """Whether the base moves or turns (over ``over`` s)."""
+        return self.base is not None or self.angle is not None
 
 
 class SetStep(_Model):
@@ -645,15 +1085,23 @@ class SequenceStep(_Model):
         0.5, ge=0, le=MAX_DURATION, allow_inf_nan=False, description="Time within tolerance, s."
     )
     timeout: Seconds = Field(4.0, description="Time each point may take before it fails, s.")
+    effector: BoneName | None = _effector_field("reaches the points")
 
     def reach_steps(self) -> tuple[ReachStep, ...]:
-        """One reach step per point.
+        """One reach step per point (a table naming the effector when the step names one).
 
         >>> SequenceStep(sequence=[(1, 2), (3, 4)]).reach_steps()[1].reach
         (3.0, 4.0)
+        >>> SequenceStep(sequence=[(1, 2)], effector="left").reach_steps()[0].reach
+        {'left': (1.0, 2.0)}
         """
         return tuple(
-            ReachStep(reach=p, tolerance=self.tolerance, hold=self.hold, timeout=self.timeout)
+            ReachStep(
+                reach=p if self.effector is None else {self.effector: p},
+                tolerance=self.tolerance,
+                hold=self.hold,
+                timeout=self.timeout,
+            )
             for p in self.sequence
         )
 
@@ -691,18 +1139,107 @@ def step_count(script: list[Step] | tuple[Step, ...]) -> int:
     return sum(len(s.sequence) if isinstance(s, SequenceStep) else 1 for s in script)
 
 
+class GaitConfig(_Model):
+    """[gait]: how a creature's legs step while the script carries its body (the chain's base)
+    along with set steps; the gait places the legs' feet, the script moves the other effectors."""
+
+    legs: list[BoneName] = Field(
+        min_length=1,
+        max_length=MAX_LINKS,
+        description="The effectors that are feet, listed front to back.",
+    )
+    groups: list[Annotated[list[BoneName], Field(min_length=1, max_length=MAX_LINKS)]] | None = (
+        Field(
+            None,
+            min_length=1,
+            max_length=MAX_LINKS,
+            description="Legs that step together, one group after the other, each leg in "
+            "exactly one group; default: the legs alternate in the order listed (1st, 3rd, 5th "
+            "... then 2nd, 4th ...): pairs for 4 legs, tripods for 6.",
+        )
+    )
+    stride: Length = Field(
+        60.0,
+        description="Length of a step, px: a lifted foot lands stride / 2 ahead of its rest spot.",
+    )
+    step_height: float = Field(
+        20.0,
+        ge=0,
+        le=MAX_COORD,
+        allow_inf_nan=False,
+        description="How high a stepping foot lifts, px.",
+    )
+    step_time: Seconds = Field(0.3, description="Time a foot spends in the air, s.")
+    threshold: Length | None = Field(
+        None,
+        description="How far the body may carry a planted foot from its rest spot before it "
+        "steps, px; default: stride / 2.",
+    )
+
+    @model_validator(mode="after")
+    def _groups_share_out_the_legs(self) -> GaitConfig:
+        for j, leg in enumerate(self.legs):
+            if leg in self.legs[:j]:
+                raise _invalid(("legs", j), f"{leg!r} is listed twice", leg)
+        if self.groups is None:
+            return self
+        placed: dict[str, int] = {}
+        for g, group in enumerate(self.groups):
+            for j, leg in enumerate(group):
+                if leg not in self.legs:
+                    raise _invalid(
+                        ("groups", g, j),
+                        f"{leg!r} is not one of the gait's legs ({_listing(self.legs)})",
+                        leg,
+                    )
+                if leg in placed:
+                    raise _invalid(
+                        ("groups", g, j),
+                        f"{leg!r} is already in groups[{placed[leg]}]; each leg steps in one group",
+                        leg,
+                    )
+                placed[leg] = g
+        missing = [leg for leg in self.legs if leg not in placed]
+        if missing:
+            raise _invalid(
+                ("groups",),
+                f"{_listing(missing)} {'is' if len(missing) == 1 else 'are'} in no group; the "
+                "groups share out every leg, each in exactly one",
+                None,
+            )
+        return self
+
+    @property
+    def step_groups(self) -> tuple[tuple[str, ...], ...]:
+        """The groups that step in turn: ``groups``, or the legs alternating as listed.
+
+        >>> GaitConfig(legs=["a", "b", "c", "d", "e", "f"]).step_groups
+        (('a', 'c', 'e'), ('b', 'd', 'f'))
+        """
+        if self.groups is not None:
+            return tuple(tuple(group) for group in self.groups)
+        if len(self.legs) == 1:
+            return (tuple(self.legs),)
+        return (tuple(self.legs[0::2]), tuple(self.legs[1::2]))
+
+    @property
+    def step_threshold(self) -> float:
+        """``threshold``, or stride / 2 when not given, px.
+
+        >>> GaitConfig(legs=["a"], stride=50.0).step_threshold
+        25.0
+        """
+        return self.stride / 2.0 if self.threshold is None else self.threshold
+
+
 def _check_start_clear(
     chain: ChainConfig, obstacles: list[SegmentObstacle | CircleObstacle]
 ) -> None:
     """Refuse a chain whose links start with their axis inside an obstacle: the links hang from
     a fixed base, so the physics would push them out against joints that cannot give, without
     bound."""
-    angle = math.radians(chain.angle)
-    joint = chain.base
-    for k, link in enumerate(chain.expanded_links):
-        low, high = link.limits or (0.0, 0.0)
-        angle += math.radians(min(max(0.0, low), high))
-        end = (joint[0] + link.length * math.cos(angle), joint[1] + link.length * math.sin(angle))
+    links = chain.expanded_links
+    for k, (joint, end) in enumerate(chain.start_segments()):
         for j, obstacle in enumerate(obstacles):
             if isinstance(obstacle, SegmentObstacle):
                 gap = _segments_distance(joint, end, obstacle.a, obstacle.b)
@@ -711,15 +1248,19 @@ def _check_start_clear(
             # A link's rounded edge may start in an obstacle (pymunk eases a shallow overlap
             # out); its axis may not.
             if gap < obstacle.radius:
+                what = (
+                    f"link {k + 1} of the chain"
+                    if chain.bones is None
+                    else f"bone {chain.bones[links[k].source].name!r}"
+                )
                 raise _invalid(
                     ("obstacles", j),
-                    f"link {k + 1} of the chain starts inside this obstacle (its axis "
+                    f"{what} starts inside this obstacle (its axis "
                     f"{obstacle.radius - gap:.3g} px deep); the chain hangs from a fixed base "
                     "and could not be pushed out: move the obstacle or change chain.base / "
                     "chain.angle",
                     None,
                 )
-        joint = end
 
 
 def _point_segment_distance(
@@ -780,7 +1321,7 @@ def _check_script_timing(script: list[Step], tick_rate: int) -> None:
             None,
         )
     for i, step in enumerate(script):
-        if isinstance(step, SetStep) and step.set.base is not None:
+        if isinstance(step, SetStep) and step.set.moves_base:
             ticks = step.set.over * tick_rate
             if ticks < MIN_TICKS_PER_TURN:
                 raise _invalid(
@@ -807,6 +1348,67 @@ def _check_script_timing(script: list[Step], tick_rate: int) -> None:
             )
 
 
+def _check_gait(gait: GaitConfig, effectors: tuple[str, ...], tick_rate: int) -> None:
+    for j, leg in enumerate(gait.legs):
+        if leg not in effectors:
+            raise _invalid(
+                ("gait", "legs", j),
+                f"no effector is named {leg!r} (effectors: {_listing(effectors)})",
+                leg,
+            )
+    ticks = gait.step_time * tick_rate
+    if ticks < MIN_TICKS_PER_TURN:
+        raise _invalid(
+            ("gait", "step_time"),
+            f"{gait.step_time:g} s is {ticks:.3g} ticks at {tick_rate} ticks/s; a step needs at "
+            f"least {MIN_TICKS_PER_TURN} ticks (step_time >= {MIN_TICKS_PER_TURN / tick_rate:.3g} "
+            "s), or the foot jumps rather than steps",
+            gait.step_time,
+        )
+
+
+def _check_script_effectors(level: Level) -> None:
+    """Every effector the script names exists and is not a leg of the gait, and a step that
+    names none has exactly one effector to move."""
+    names, free = level.chain.effector_names, level.script_effectors
+
+    def unknown(name: str) -> str | None:
+        if name not in names:
+            return f"no effector is named {name!r} (effectors: {_listing(names)})"
+        if name not in free:
+            return (
+                f"{name!r} is a leg of the gait, which places its foot; the script moves the "
+                f"other effectors ({_listing(free)})"
+            )
+        return None
+
+    def unnamed(how: str) -> str | None:
+        """Why a step that names no effector cannot run, or None when it can."""
+        if len(free) == 1:
+            return None
+        if not free:
+            return "every effector is a leg of the gait, so this step has none to move"
+        return f"the chain has {len(free)} effectors ({_listing(free)}); say which: {how}"
+
+    # A reach step's path starts with its union tag, "reach", as pydantic's own errors do.
+    for i, step in enumerate(level.script):
+        if isinstance(step, ReachStep) and isinstance(step.reach, dict):
+            for name in step.reach:
+                problem = unknown(name)
+                if problem:
+                    raise _invalid(("script", i, "reach", "reach", name), problem, name)
+        elif isinstance(step, ReachStep):
+            problem = unnamed("reach = { name = [x, y], ... }")
+            if problem:
+                raise _invalid(("script", i, "reach", "reach"), problem, list(step.reach))
+        elif isinstance(step, _Follow | SequenceStep):
+            problem = (
+                unnamed('effector = "name"') if step.effector is None else unknown(step.effector)
+            )
+            if problem:
+                raise _invalid(("script", i, "effector"), problem, step.effector)
+
+
 class Level(_Model):
     """A whole level file. Load one with :func:`ikgame.level.loader.load_level`.
 
@@ -830,6 +1432,9 @@ class Level(_Model):
     )
     script: list[Step] = Field(
         min_length=1, max_length=MAX_STEPS, description="The steps, run in order."
+    )
+    gait: GaitConfig | None = Field(
+        None, description="How the legs step while the body moves (creatures); none: no gait."
     )
 
     @model_validator(mode="after")
@@ -882,4 +1487,19 @@ class Level(_Model):
                     f"no prop is named {goal.prop!r} (props: {known})",
                     goal.prop,
                 )
+        if self.gait is not None:
+            _check_gait(self.gait, self.chain.effector_names, self.world.tick_rate)
+        _check_script_effectors(self)
         return self
+
+    @property
+    def script_effectors(self) -> tuple[str, ...]:
+        """The effectors the script moves, in link order: all but the gait's legs.
+
+        >>> Level.model_validate({"level": {"name": "x", "duration": 1.0},
+        ...     "chain": {"links": [{"length": 50.0}]},
+        ...     "script": [{"wait": 1.0}]}).script_effectors
+        ('tip',)
+        """
+        legs = () if self.gait is None else self.gait.legs
+        return tuple(name for name in self.chain.effector_names if name not in legs)

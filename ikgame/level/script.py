@@ -1,10 +1,15 @@
-"""The level script at run time: which target the chain aims at, and how each step scored.
+"""The level script at run time: where each effector aims, and how each step scored.
 
 A :class:`ScriptRunner` plays the level's steps in order. Each tick the simulation reads
-``runner.target`` before stepping the world, then calls ``runner.observe(time, dt, effector)``
-with the new end-effector position; a step that finishes hands over to the next one at once.
-Each step kind is a small class with ``target(time)``, ``observe(time, dt, effector)`` (True
-when finished) and ``outcome(time)``; add a kind by adding a class and a line to ``_RUNS``.
+``runner.targets`` (``runner.target`` for a chain) before stepping the world, then calls
+``runner.observe(time, dt, effectors)`` with the new effector positions (a chain may pass its
+tip's alone); a step that finishes hands over to the next one at once. Targets are sticky: an
+effector keeps its last target until a later step sets it again, and one never targeted has
+none (it holds its pose).
+
+Each step kind is a small class with ``effectors`` (the names it moves), ``targets(time)``,
+``observe(time, dt, positions)`` (True when finished) and ``outcome(time)``; add a kind by adding
+a class and a line to ``_RUNS``.
 
 Two kinds never reach a run class: a ``sequence`` is expanded into reach steps when the runner
 is built (:func:`expand_script`), and a ``set`` step finishes the moment it begins, leaving its
@@ -15,13 +20,14 @@ from __future__ import annotations
 
 import bisect
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Final
 
 import numpy as np
 
 from ikgame.level.model import (
+    CHAIN_EFFECTOR,
     FollowCircle,
     FollowLine,
     FollowLissajous,
@@ -72,7 +78,10 @@ class StepOutcome:
 
     ``index`` counts the steps as they run (each point of a ``sequence`` is a step of its own);
     ``source`` is the step's index in the file's ``script`` list. ``score`` is 0..100 for the
-    steps that are scored (reach, follow) and None for wait and set.
+    steps that are scored (reach, follow) and None for wait and set. In a tree (a script whose
+    effectors are named), ``effectors`` names those the step moved and ``final_errors`` gives
+    each one's final error in that order; ``final_error`` is then the largest of them. A
+    chain's outcomes leave both empty.
 
     >>> StepOutcome(0, "reach", True, True, 1.25, 2.0).as_dict()["time_to_reach"]
     1.25
@@ -91,11 +100,22 @@ class StepOutcome:
     note: str = ""
     score: float | None = None
     source: int | None = None
+    effectors: tuple[str, ...] = ()
+    final_errors: tuple[float, ...] = ()
 
     def as_dict(self) -> dict[str, object]:
         """Plain data for ``results.json``, in a fixed key order: floats rounded to 1e-4,
-        unmeasured values None."""
-        return {key: _plain(getattr(self, key)) for key in _OUTCOME_KEYS}
+        unmeasured values None; ``effectors`` and ``final_errors`` last, in a tree only.
+
+        >>> StepOutcome(0, "reach", True, effectors=("a", "b"),
+        ...     final_errors=(1.0, 2.5)).as_dict()["final_errors"]
+        [1.0, 2.5]
+        """
+        out = {key: _plain(getattr(self, key)) for key in _OUTCOME_KEYS}
+        if self.effectors:
+            out["effectors"] = list(self.effectors)
+            out["final_errors"] = [_plain(e) for e in self.final_errors]
+        return out
 
 
 def _plain(value: object) -> object:
@@ -177,14 +197,23 @@ def follow_path(step: FollowLine | FollowCircle | FollowLissajous | FollowPolyli
 
 
 class _Run:
-    """What every step kind shares: where it sits in the script and when it began."""
+    """What every step kind shares: where it sits in the script, when it began, and which
+    effectors it moves (``named``: report them in the outcome, as a tree's script does)."""
 
     kind = ""
 
-    def __init__(self, index: int, source: int, start: float) -> None:
-        self.index, self.source, self.start = index, source, start
+    def __init__(self, index: int, source: int, start: float, named: bool) -> None:
+        self.index, self.source, self.start, self.named = index, source, start, named
+        self.effectors: tuple[str, ...] = ()
+        self.errors: dict[str, float] = {}
+
+    def targets(self, time: float) -> dict[str, np.ndarray]:
+        return {}
 
     def _outcome(self, passed: bool, ended: float, **measures: object) -> StepOutcome:
+        if self.named and self.effectors:
+            measures["effectors"] = self.effectors
+            measures["final_errors"] = tuple(self.errors.get(n, math.nan) for n in self.effectors)
         return StepOutcome(
             index=self.index,
             kind=self.kind,
@@ -197,23 +226,38 @@ class _Run:
 
 
 class _ReachRun(_Run):
-    """Aim at a fixed point; pass once the effector stays within tolerance for ``hold`` s."""
+    """Aim each of the step's effectors at its point; pass once they are all within tolerance
+    together for ``hold`` s. The step's error is the largest of theirs."""
 
     kind = "reach"
 
-    def __init__(self, index: int, source: int, step: ReachStep, start: float, previous) -> None:
-        super().__init__(index, source, start)
+    def __init__(
+        self,
+        index: int,
+        source: int,
+        step: ReachStep,
+        start: float,
+        default: str | None,
+        named: bool,
+    ) -> None:
+        super().__init__(index, source, start, named)
         self.step = step
-        self.point = np.array(step.reach, dtype=float)
+        self.points = {
+            name: np.array(point, dtype=float) for name, point in step.targets(default).items()
+        }
+        self.effectors = tuple(self.points)
         self.entered: float | None = None
         self.error = math.nan
         self.done_as: StepOutcome | None = None
 
-    def target(self, time: float) -> np.ndarray | None:
-        return self.point
+    def targets(self, time: float) -> dict[str, np.ndarray]:
+        return self.points
 
-    def observe(self, time: float, dt: float, effector: np.ndarray) -> bool:
-        self.error = float(np.hypot(*(effector - self.point)))
+    def observe(self, time: float, dt: float, positions: Mapping[str, np.ndarray]) -> bool:
+        self.errors = {
+            name: float(np.hypot(*(positions[name] - point))) for name, point in self.points.items()
+        }
+        self.error = max(self.errors.values())
         if self.error <= self.step.tolerance:
             if self.entered is None:
                 self.entered = time
@@ -246,15 +290,19 @@ class _ReachRun(_Run):
 
 
 class _FollowRun(_Run):
-    """Aim at the path's start for ``lead_in`` s, then at a target moving along the path; the
-    tracking error is measured every tick of the motion and passes when its mean stays within
-    tolerance."""
+    """Aim the effector at the path's start for ``lead_in`` s, then at a target moving along the
+    path; the tracking error is measured every tick of the motion and passes when its mean stays
+    within tolerance."""
 
     kind = "follow"
 
-    def __init__(self, index: int, source: int, step, start: float, previous) -> None:
-        super().__init__(index, source, start)
+    def __init__(
+        self, index: int, source: int, step, start: float, default: str | None, named: bool
+    ) -> None:
+        super().__init__(index, source, start, named)
         self.step = step
+        self.name = _effector(step.effector, default)
+        self.effectors = (self.name,)
         self.path = follow_path(step)
         self.ease = EASINGS[step.easing]
         self.duration = follow_duration(step)
@@ -266,15 +314,16 @@ class _FollowRun(_Run):
         self.error = math.nan
         self.ended: float | None = None
 
-    def target(self, time: float) -> np.ndarray | None:
-        return self.point
+    def targets(self, time: float) -> dict[str, np.ndarray]:
+        return {self.name: self.point}
 
-    def observe(self, time: float, dt: float, effector: np.ndarray) -> bool:
+    def observe(self, time: float, dt: float, positions: Mapping[str, np.ndarray]) -> bool:
         t = time - self.moving_from
         if t > _EPS:
             u = min(t / self.duration, 1.0)
             self.point = np.array(self.path(self.duration * self.ease(u)))
-            self.error = float(np.hypot(*(effector - self.point)))
+            self.error = float(np.hypot(*(positions[self.name] - self.point)))
+            self.errors = {self.name: self.error}
             self.total += self.error
             self.samples += 1
             self.worst = max(self.worst, self.error)
@@ -303,19 +352,24 @@ class _FollowRun(_Run):
 
 
 class _WaitRun(_Run):
-    """Keep the previous target for a while; passes unless the level ends first."""
+    """Keep every target for a while; passes unless the level ends first."""
 
     kind = "wait"
 
-    def __init__(self, index: int, source: int, step: WaitStep, start: float, previous) -> None:
-        super().__init__(index, source, start)
-        self.step, self.point = step, previous
+    def __init__(
+        self,
+        index: int,
+        source: int,
+        step: WaitStep,
+        start: float,
+        default: str | None,
+        named: bool,
+    ) -> None:
+        super().__init__(index, source, start, named)
+        self.step = step
         self.ended: float | None = None
 
-    def target(self, time: float) -> np.ndarray | None:
-        return self.point
-
-    def observe(self, time: float, dt: float, effector: np.ndarray) -> bool:
+    def observe(self, time: float, dt: float, positions: Mapping[str, np.ndarray]) -> bool:
         if time - self.start >= self.step.wait - _EPS:
             self.ended = time
             return True
@@ -326,6 +380,18 @@ class _WaitRun(_Run):
         return self._outcome(
             ended, self.ended if ended else time, note="" if ended else "level ended first"
         )
+
+
+def _effector(name: str | None, default: str | None) -> str:
+    """The effector a step moves: the one it names, else the script's only one."""
+    if name is not None:
+        return name
+    if default is None:
+        raise ValueError(
+            "a step that names no effector moves the only one, and this script has several; "
+            'name it: effector = "name"'
+        )
+    return default
 
 
 _RUNS = {
@@ -341,21 +407,42 @@ _RUNS = {
 class ScriptRunner:
     """Plays a level's script steps in order and keeps their outcomes.
 
+    ``effectors`` names the effectors the script moves (``Level.script_effectors``; a chain's
+    one, ``"tip"``, by default). A step that names none moves the only one; in a tree of several
+    every step names its effectors (the level model checks it).
+
     >>> from ikgame.level.model import ReachStep
     >>> runner = ScriptRunner([ReachStep(reach=(0.0, 10.0), hold=0.0)])
     >>> runner.target.tolist()
     [0.0, 10.0]
     >>> runner.observe(0.1, 0.1, np.array([0.0, 9.0])); runner.done
     True
+    >>> tree = ScriptRunner([ReachStep(reach={"left": (0, 5), "right": (9, 5)})],
+    ...     effectors=("left", "right"))
+    >>> {name: point.tolist() for name, point in tree.targets.items()}
+    {'left': [0.0, 5.0], 'right': [9.0, 5.0]}
     """
 
-    def __init__(self, steps: list[Step] | tuple[Step, ...]) -> None:
+    def __init__(
+        self, steps: list[Step] | tuple[Step, ...], effectors: Sequence[str] = (CHAIN_EFFECTOR,)
+    ) -> None:
         self.steps = expand_script(steps)
+        self.effectors = tuple(effectors)
         self.outcomes: list[StepOutcome] = []
         # Changes of set steps that began, oldest first, until take_changes().
         self.pending: list[SetChanges] = []
+        self._default = self.effectors[0] if len(self.effectors) == 1 else None
+        # A chain's outcomes keep the shape results.json has always had.
+        self._named = self.effectors != (CHAIN_EFFECTOR,)
+        self._targets: dict[str, np.ndarray] = {}
         self._run = None
-        self._begin(0, 0.0, None)
+        self._begin(0, 0.0)
+
+    @property
+    def default_effector(self) -> str | None:
+        """The effector a step that names none moves: the only one, or None when the script
+        moves several."""
+        return self._default
 
     @property
     def step_index(self) -> int:
@@ -368,9 +455,16 @@ class ScriptRunner:
         return self._run is None
 
     @property
+    def targets(self) -> dict[str, np.ndarray]:
+        """Every effector's current target, px, by name: those a step has aimed so far (each
+        keeps its last target until a step sets it again), in the order first aimed."""
+        return dict(self._targets)
+
+    @property
     def target(self) -> np.ndarray | None:
-        """The point the chain should aim at now, px (None before any target is set)."""
-        return self._target
+        """The point the only effector aims at now, px (None before any target is set, and in a
+        script of several effectors: read :attr:`targets`)."""
+        return None if self._default is None else self._targets.get(self._default)
 
     def take_changes(self) -> list[SetChanges]:
         """The changes of the ``set`` steps that began since the last call, oldest first.
@@ -382,26 +476,34 @@ class ScriptRunner:
         changes, self.pending = self.pending, []
         return changes
 
-    def observe(self, time: float, dt: float, effector: np.ndarray) -> None:
-        """Score the tick that just ended at ``time`` (s) with the effector at ``effector`` (px)."""
+    def observe(
+        self, time: float, dt: float, effectors: Mapping[str, np.ndarray] | np.ndarray
+    ) -> None:
+        """Score the tick that just ended at ``time`` (s) with the effectors at ``effectors``
+        (px, by name; a chain may pass its tip's position alone)."""
         if self._run is None:
             return
-        finished = self._run.observe(time, dt, effector)
-        self._target = self._run.target(time)
+        if not isinstance(effectors, Mapping):
+            if self._default is None:
+                raise ValueError(
+                    f"this script moves several effectors ({', '.join(self.effectors)}); "
+                    "observe them by name"
+                )
+            effectors = {self._default: effectors}
+        finished = self._run.observe(time, dt, effectors)
+        self._targets.update(self._run.targets(time))
         if finished:
             self.outcomes.append(self._run.outcome(time))
-            self._begin(len(self.outcomes), time, self._target)
+            self._begin(len(self.outcomes), time)
 
     def finish(self, time: float) -> list[StepOutcome]:
         """End the script at ``time`` (s): unfinished steps fail. Returns every outcome."""
         while self._run is not None:
             self.outcomes.append(self._run.outcome(time))
-            self._begin(len(self.outcomes), time, self._target, ended=True)
+            self._begin(len(self.outcomes), time, ended=True)
         return self.outcomes
 
-    def _begin(
-        self, index: int, time: float, previous: np.ndarray | None, *, ended: bool = False
-    ) -> None:
+    def _begin(self, index: int, time: float, *, ended: bool = False) -> None:
         while index < len(self.steps) and isinstance(self.steps[index][1], SetStep):
             source, step = self.steps[index]
             if not ended:
@@ -415,8 +517,7 @@ class ScriptRunner:
             index += 1
         if index >= len(self.steps):
             self._run = None
-            self._target = previous
             return
         source, step = self.steps[index]
-        self._run = _RUNS[type(step)](index, source, step, time, previous)
-        self._target = self._run.target(time)
+        self._run = _RUNS[type(step)](index, source, step, time, self._default, self._named)
+        self._targets.update(self._run.targets(time))

@@ -44,6 +44,7 @@ _SECTIONS: Final = (
     ("`[world]`", "WorldConfig", None),
     ("`[chain]`", "ChainConfig", None),
     ("`[[chain.links]]`", "LinkConfig", None),
+    ("`[[chain.bones]]`", "BoneConfig", None),
     ('`[[obstacles]]` with `kind = "segment"`', "SegmentObstacle", None),
     ('`[[obstacles]]` with `kind = "circle"`', "CircleObstacle", None),
     ('`[[props]]` with `kind = "ball"`', "BallProp", None),
@@ -58,6 +59,7 @@ _SECTIONS: Final = (
     ("`[[script]]` set", "SetStep", None),
     ("The `set` table of a set step", "SetChanges", None),
     ("`[[script]]` sequence", "SequenceStep", None),
+    ("`[gait]`", "GaitConfig", None),
 )
 """Reference sections in reading order: heading, model name, and a description overriding the
 model's docstring (whose doctest has no place in a reference)."""
@@ -187,7 +189,7 @@ def _limits() -> list[tuple[str, str]]:
             f"{MAX_SPRITE_PIXELS:,}, at most {MAX_SPRITE_SIDE} px a side",
         ),
         ("Pixels of all a level's sprite images together", f"{MAX_SPRITE_TOTAL_PIXELS:,}"),
-        ("Links in the chain (after `repeat`)", str(model.MAX_LINKS)),
+        ("Links in the chain or tree (after `repeat`)", str(model.MAX_LINKS)),
         ("Duration", f"{model.MAX_DURATION:g} s"),
         ("Recorded frames (`duration` x `fps`)", f"{model.MAX_FRAMES:,}"),
         ("Physics ticks (`duration` x `tick_rate`)", f"{model.MAX_TICKS:,}"),
@@ -202,6 +204,9 @@ def _limits() -> list[tuple[str, str]]:
 
 def _type_and_range(prop: dict) -> tuple[str, str]:
     """A property's type and allowed values in words."""
+    if "oneOf" in prop:
+        kinds, ranges = zip(*(_type_and_range(option) for option in prop["oneOf"]), strict=True)
+        return " or ".join(kinds), "; ".join(r for r in ranges if r)
     options = [p for p in prop.get("anyOf", [prop]) if p.get("type") != "null"]
     (prop,) = options
     if "const" in prop:
@@ -213,9 +218,17 @@ def _type_and_range(prop: dict) -> tuple[str, str]:
     kind = prop.get("type")
     if kind in ("number", "integer"):
         return kind, _bounds(prop)
+    if kind == "boolean":
+        return "boolean", ""
     if kind == "string":
         low, high = prop.get("minLength", 0), prop.get("maxLength")
-        return "string", f"{low}..{high} characters"
+        letters = ", letters, digits, _ and -" if prop.get("pattern") == model.KEY_PATTERN else ""
+        return "string", f"{low}..{high} characters{letters}"
+    if kind == "object":
+        (value,) = prop["patternProperties"].values()
+        element, _ = _type_and_range(value)
+        low, high = prop.get("minProperties", 0), prop.get("maxProperties")
+        return f"table of name = {element}", f"{low}..{high} entries"
     if kind == "array" and "prefixItems" in prop:
         items = prop["prefixItems"]
         bounds = {_bounds(item) for item in items}

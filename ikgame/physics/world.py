@@ -53,18 +53,33 @@ _IMPULSE: Final = pymunk.Constraint.impulse.fget
 attribute hook."""
 
 _CHAIN_GROUP: Final = 1
+_LINK_TYPE: Final = 1
+"""The collision type of every link's shape."""
 _OBSTACLE_ELASTICITY: Final = 1.0
 """So that a prop's own elasticity is its bounce off an obstacle (pymunk multiplies the two)."""
 
 
 @dataclass
 class _BaseMove:
-    """A move of the kinematic base under way: from ``start`` to ``end`` (px) in ``over`` s."""
+    """A move of the kinematic base under way: from ``start`` to ``end`` (px) and from
+    ``start_angle`` to ``end_angle`` (radians) in ``over`` s."""
 
     start: np.ndarray
     end: np.ndarray
+    start_angle: float
+    end_angle: float
     over: float
     elapsed: float = 0.0
+
+    def at(self, elapsed: float) -> tuple[np.ndarray, float, bool]:
+        """Where the base should be ``elapsed`` s into the move: position (px), angle
+        (radians), and whether the move is over then."""
+        # Ticks add up to the move's time only to within rounding: finish on the last one.
+        fraction = 1.0 if elapsed >= self.over - 1e-9 else elapsed / self.over
+        eased = fraction * fraction * (3.0 - 2.0 * fraction)
+        position = self.start + (self.end - self.start) * eased
+        angle = self.start_angle + (self.end_angle - self.start_angle) * eased
+        return position, angle, fraction >= 1.0
 
 
 def build_skeleton(level: Level) -> Skeleton:
@@ -78,11 +93,13 @@ def build_skeleton(level: Level) -> Skeleton:
     150.0
     """
     links = level.chain.expanded_links
-    return Skeleton.chain(
+    return Skeleton.tree(
         [link.length for link in links],
+        [link.parent_index for link in links],
         base=level.chain.base,
         base_angle=math.radians(level.chain.angle),
         limits=[link.limits_rad for link in links],
+        root_offsets=[link.at for link in links],
     )
 
 
@@ -109,7 +126,7 @@ class World:
         self.space.add(self.base_body)
 
         links = level.chain.expanded_links
-        initial = self.skeleton.clamp(np.zeros(self.skeleton.count))
+        initial = self.skeleton.clamp(np.radians([link.angle for link in links]))
         self.max_torque = np.array([link.max_torque for link in links])
         self.max_speed = np.radians([link.max_speed for link in links])
         self.link_widths = np.array([link.width for link in links])
@@ -118,16 +135,38 @@ class World:
         self.bodies: list[pymunk.Body] = []
         self.motors: list[pymunk.SimpleMotor] = []
         self.limit_joints: list[pymunk.RotaryLimitJoint | None] = []
-        shape_filter = pymunk.ShapeFilter(group=_CHAIN_GROUP)
+        collide = level.chain.branches_collide
+        # Links share a group that never collides with itself, unless the tree's branches are
+        # to collide: then a handler lets through only pairs of links from different branches.
+        shape_filter = pymunk.ShapeFilter(group=0 if collide else _CHAIN_GROUP)
 
-        parent = self.base_body
-        parent_anchor = (0.0, 0.0)
-        joint = np.asarray(level.chain.base, dtype=float)
-        world_angle = self.skeleton.base_angle
+        self.parents = self.skeleton.parents
+        """(n,) parent link index, -1 for a link on the base."""
+        self.effector_links = np.array(level.chain.effector_links, dtype=np.int64)
+        """(k,) the links whose tips are end effectors."""
+        self.is_tree = level.chain.bones is not None
+        """True for a level of named bones (read its joints in the tree layout), False for a
+        chain of links."""
+        base_direction = _direction(self.skeleton.base_angle)
+        base_normal = np.array((-base_direction[1], base_direction[0]))
+        ends = np.empty((len(links), 2))
+        world_angles = np.empty(len(links))
         for i, link in enumerate(links):
             half = link.length / 2.0
-            world_angle += initial[i]
-            direction = np.array((math.cos(world_angle), math.sin(world_angle)))
+            p = int(self.parents[i])
+            if p < 0:
+                offset = self.skeleton.root_offsets[i]
+                parent, parent_anchor = self.base_body, (float(offset[0]), float(offset[1]))
+                joint = np.asarray(level.chain.base, dtype=float)
+                if np.any(offset):
+                    joint = joint + offset[0] * base_direction + offset[1] * base_normal
+                world_angle = self.skeleton.base_angle + initial[i]
+            else:
+                parent, parent_anchor = self.bodies[p], (self._halves[p], 0.0)
+                joint, world_angle = ends[p], world_angles[p] + initial[i]
+            direction = _direction(world_angle)
+            world_angles[i] = world_angle
+            ends[i] = joint + link.length * direction
             radius = link.width / 2.0
             body = pymunk.Body(
                 link.mass, pymunk.moment_for_segment(link.mass, (-half, 0), (half, 0), radius)
@@ -136,6 +175,7 @@ class World:
             body.angle = world_angle
             shape = pymunk.Segment(body, (-half, 0), (half, 0), radius)
             shape.filter = shape_filter
+            shape.collision_type = _LINK_TYPE
             shape.friction = 0.8
             pivot = pymunk.PivotJoint(parent, body, parent_anchor, (-half, 0))
             # SimpleMotor drives (b.w - a.w) toward -rate; commands go through set_rates.
@@ -150,9 +190,16 @@ class World:
             self.bodies.append(body)
             self.motors.append(motor)
             self.limit_joints.append(limit_joint)
-            parent = body
-            parent_anchor = (half, 0.0)
-            joint = joint + link.length * direction
+
+        if collide:
+            apart = _apart(self.skeleton)
+            index = {shape: i for i, body in enumerate(self.bodies) for shape in body.shapes}
+
+            def begin(arbiter: pymunk.Arbiter, _space: pymunk.Space, _data: object) -> None:
+                a, b = arbiter.shapes
+                arbiter.process_collision = bool(apart[index[a], index[b]])
+
+            self.space.on_collision(_LINK_TYPE, _LINK_TYPE, begin=begin)
 
         for obstacle in level.obstacles:
             self.space.add(_obstacle_shape(self.space.static_body, obstacle))
@@ -170,8 +217,6 @@ class World:
         self._lengths = 2.0 * np.array(self._halves, dtype=float)
         self._halves_array = 0.5 * self._lengths
         self._feed_forward = np.zeros(self.count)
-        self.parents = np.arange(self.count) - 1
-        """(n,) the link each link's joint hangs from (-1: the base)."""
         self._reads = pymunk.batch.Buffer()
         self._rows: _Rows | None = None
 
@@ -230,16 +275,30 @@ class World:
         return state, rows
 
     def joint_positions(self) -> np.ndarray:
-        """(n + 1, 2) world positions of the joints, then the end effector, px."""
-        points = np.empty((self.count + 1, 2))
-        for i, body in enumerate(self.bodies):
-            points[i] = body.local_to_world((-self._halves[i], 0.0))
-        points[-1] = self.end_effector()
-        return points
+        """World positions of the joints, px: for a chain (n + 1, 2), joint 0 .. joint n-1 then
+        the end effector; for a tree of bones (2n, 2), the n link starts then the n link ends
+        (see :attr:`is_tree`)."""
+        starts = [
+            b.local_to_world((-h, 0.0)) for b, h in zip(self.bodies, self._halves, strict=True)
+        ]
+        if not self.is_tree:
+            return np.array([*starts, self.end_effector()], dtype=float)
+        ends = [b.local_to_world((h, 0.0)) for b, h in zip(self.bodies, self._halves, strict=True)]
+        return np.array(starts + ends, dtype=float)
 
     def end_effector(self) -> np.ndarray:
-        """(2,) world position of the chain's tip, px."""
-        return np.array(self.bodies[-1].local_to_world((self._halves[-1], 0.0)))
+        """(2,) world position of the first end effector (a chain's tip), px."""
+        return self.effector_positions()[0]
+
+    def effector_positions(self) -> np.ndarray:
+        """(k, 2) world position of each end effector, px, in :attr:`effector_links` order."""
+        return self.link_ends(self.effector_links)
+
+    def link_ends(self, links: np.ndarray) -> np.ndarray:
+        """(m, 2) world position of the far end of each of ``links`` (indices), px."""
+        return np.array(
+            [self.bodies[i].local_to_world((self._halves[i], 0.0)) for i in links], dtype=float
+        )
 
     def set_rates(self, rates: np.ndarray) -> None:
         """Ask each joint's motor for a relative angular velocity (child - parent), rad/s.
@@ -330,8 +389,11 @@ class World:
         """Change gravity from now on, px/s^2."""
         self.space.gravity = gravity
 
-    def move_base(self, to: tuple[float, float], over: float) -> None:
-        """Move the chain's base to ``to`` (px) over the next ``over`` seconds, then stop there.
+    def move_base(
+        self, to: tuple[float, float] | None, over: float, angle: float | None = None
+    ) -> None:
+        """Move the chain's base to ``to`` (px) and turn it to ``angle`` (radians, the shorter
+        way round) over the next ``over`` seconds, then stop there; None keeps either as is.
 
         The kinematic base body is given the velocity that keeps it on a smoothstep profile (at
         rest at both ends, so the chain is not jerked), which pymunk integrates exactly; the last
@@ -348,7 +410,23 @@ class World:
         if not (math.isfinite(over) and over > 0):
             raise ValueError(f"over must be a positive number of seconds, got {over!r}")
         start = np.array(self.base_body.position)
-        self._base_move = _BaseMove(start, np.asarray(to, dtype=float), float(over))
+        end = start if to is None else np.asarray(to, dtype=float)
+        start_angle = float(self.base_body.angle)
+        end_angle = start_angle
+        if angle is not None:
+            end_angle = start_angle + math.remainder(angle - start_angle, math.tau)
+        self._base_move = _BaseMove(start, end, start_angle, end_angle, float(over))
+
+    def base_motion(self) -> tuple[np.ndarray, float] | None:
+        """The base's velocity (px/s) and spin (rad/s) over the next step, or None while it
+        stands still."""
+        move = self._base_move
+        if move is None:
+            return None
+        # The step sets the velocity that lands the base on its profile at the step's end.
+        position, angle, _ = move.at(move.elapsed + self.last_dt)
+        velocity = (position - np.array(self.base_body.position)) / self.last_dt
+        return velocity, (angle - float(self.base_body.angle)) / self.last_dt
 
     def prop_states(self) -> np.ndarray:
         """(p, 3) each prop's ``(x, y, angle)``: centre in px, angle in radians.
@@ -372,20 +450,25 @@ class World:
             self.space.step(dt)
             return
         move.elapsed += dt
-        # Ticks add up to the move's time only to within rounding: finish on the last one.
-        fraction = 1.0 if move.elapsed >= move.over - 1e-9 else move.elapsed / move.over
-        eased = fraction * fraction * (3.0 - 2.0 * fraction)
-        wanted = move.start + (move.end - move.start) * eased
+        wanted, wanted_angle, done = move.at(move.elapsed)
         self.base_body.velocity = tuple((wanted - np.array(self.base_body.position)) / dt)
+        turning = move.end_angle != move.start_angle
+        if turning:
+            self.base_body.angular_velocity = (wanted_angle - self.base_body.angle) / dt
         self.space.step(dt)
-        if fraction >= 1.0:
+        if done:
             self.base_body.velocity = (0.0, 0.0)
             self.base_body.position = tuple(move.end)
+            self.base_body.angular_velocity = 0.0
+            if turning:
+                self.base_body.angle = move.end_angle
             self._base_move = None
         # Solvers need the base where it is now; the Skeleton is frozen, so a new one. A base
         # dragged off by a blow-up keeps the old skeleton: :meth:`diverged` reports it.
-        if np.all(np.isfinite(self.base_body.position)):
-            self.skeleton = self.skeleton.moved_to(self.base_body.position)
+        if np.all(np.isfinite(self.base_body.position)) and math.isfinite(self.base_body.angle):
+            self.skeleton = self.skeleton.moved_to(
+                self.base_body.position, self.base_body.angle if turning else None
+            )
 
     def diverged(self) -> bool:
         """True when any link's, prop's or the base's pose is NaN, infinite, or absurdly far.
@@ -409,6 +492,20 @@ class World:
         named += [(f"prop {i + 1}", b) for i, b in enumerate(self.prop_bodies)]
         sane = _sane(_poses([body for _, body in named]))
         return next((name for (name, _), ok in zip(named, sane, strict=True) if not ok), None)
+
+
+def _apart(skeleton: Skeleton) -> np.ndarray:
+    """(n, n) bool: which pairs of links may collide: neither hangs from the other and they do
+    not share a joint (siblings, or roots on the base)."""
+    related = skeleton.ancestors | skeleton.ancestors.T
+    parents = skeleton.parents
+    siblings = parents[:, None] == parents[None, :]
+    return ~(related | siblings)
+
+
+def _direction(angle: float) -> np.ndarray:
+    """(2,) unit vector at ``angle`` radians."""
+    return np.array((math.cos(angle), math.sin(angle)))
 
 
 class _Rows:

@@ -24,7 +24,7 @@ import numpy as np
 from PIL import GifImagePlugin, Image
 
 from ikgame.render.png import PNG_SIGNATURE, png_chunk, png_chunks
-from ikgame.render.theme import Theme
+from ikgame.render.theme import RGB, Theme
 
 __all__ = ["ApngWriter", "GifWriter", "build_palette", "gif_durations", "quantizer"]
 
@@ -36,12 +36,13 @@ GIF_FREQUENT = 64  # most common exact colours kept as they are: the flat fills 
 # -- GIF -----------------------------------------------------------------------------------------
 
 
-def build_palette(samples: Sequence[Image.Image], theme: Theme) -> bytes:
+def build_palette(samples: Sequence[Image.Image], theme: Theme, extra: Sequence[RGB] = ()) -> bytes:
     """One palette for the whole GIF, ``GIF_COLORS`` RGB entries, from a sample of frames.
 
-    The theme's colours and the samples' most common exact colours come first, so flat fills
-    map to themselves with no dithering; the rest of the entries adapt (median cut) to the
-    remaining pixels: anti-aliased edges, the trail's fade, text.
+    The theme's colours, the ``extra`` colours (a tree's effector colours) and the samples'
+    most common exact colours come first, so flat fills map to themselves with no dithering;
+    the rest of the entries adapt (median cut) to the remaining pixels: anti-aliased edges, the
+    trail's fade, text.
     """
     # Counted sample by sample and added up, rather than stacked into one tall image first.
     totals: Counter[tuple[int, int, int]] = Counter()
@@ -49,7 +50,8 @@ def build_palette(samples: Sequence[Image.Image], theme: Theme) -> bytes:
         rgb = image.convert("RGB")
         totals.update({c: n for n, c in rgb.getcolors(rgb.width * rgb.height) or []})
     counts = sorted(((n, rgb) for rgb, n in totals.items()), key=lambda item: (-item[0], item[1]))
-    fixed = list(dict.fromkeys(theme.colors() + [rgb for _, rgb in counts[:GIF_FREQUENT]]))
+    frequent = [rgb for _, rgb in counts[:GIF_FREQUENT]]
+    fixed = list(dict.fromkeys(theme.colors() + list(extra) + frequent))
     fixed = fixed[:GIF_COLORS]
     taken = set(fixed)
     rest = [(n, rgb) for n, rgb in counts if rgb not in taken]

@@ -112,7 +112,8 @@ class Camera:
         """A camera that shows everything a run can touch, centred, at one scale on both axes.
 
         Without ``scene.bounds`` the view holds the obstacles, the goals, the script's targets
-        and the chain: given a run's snapshots, every place its joints and props went; given
+        (every effector's, for a tree) and the links: given a run's snapshots, every place its
+        joints, props and a tree's current targets went; given
         only a base point, the square around the chain's full reach. ``margin`` (a fraction of
         the shorter image side) is added all around. With ``scene.bounds`` the view fits those
         bounds exactly.
@@ -159,6 +160,10 @@ def _chain_box(scene: Scene, snapshots_or_base: Sequence[Snapshot] | object) -> 
         # reaches below it, and the full circle would leave half of every frame empty.
         parts = [snap.joints for snap in snapshots_or_base]
         parts += [snap.props[:, :2] for snap in snapshots_or_base if len(snap.props)]
+        # A tree's current targets too (a chain frames the scene's targets only).
+        for snap in snapshots_or_base:
+            targets = snap.target_points if snap.targets is not None else np.zeros((0, 2))
+            parts.append(targets[np.all(np.isfinite(targets), axis=1)])
         points = np.concatenate(parts).astype(float)
         pad = float(np.max(scene.link_widths, initial=0.0)) / 2.0
         return np.array([points.min(axis=0) - pad, points.max(axis=0) + pad])
@@ -184,7 +189,9 @@ def _scene_box(scene: Scene, chain: np.ndarray) -> tuple[float, float, float, fl
     if len(circles):
         lows.append((circles[:, :2] - circles[:, 2:3]).min(axis=0))
         highs.append((circles[:, :2] + circles[:, 2:3]).max(axis=0))
-    targets = np.asarray(scene.targets, dtype=float).reshape(-1, 2)
+    targets = np.concatenate(
+        [np.asarray(scene.targets, dtype=float).reshape(-1, 2), *scene.effector_targets]
+    )
     if len(targets):
         lows.append(targets.min(axis=0))
         highs.append(targets.max(axis=0))

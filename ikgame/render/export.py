@@ -42,11 +42,11 @@ from ikgame.render.pillow import render_snapshot
 from ikgame.render.png import check_compress_level, png_bytes
 from ikgame.render.theme import Theme, load_theme
 from ikgame.render.video import Mp4Writer, check_video, even_size
-from ikgame.snapshot import Scene, Snapshot
+from ikgame.snapshot import Scene, Snapshot, effector_positions
 
 __all__ = ["check_out_dir", "export_run", "motion_json", "parse_size", "trail_at", "write_motion"]
 
-TRAIL_SECONDS = 1.5  # s of end-effector path drawn behind it
+TRAIL_SECONDS = 1.5  # s of each end effector's path drawn behind it
 GIF_MAX_FPS = 50.0  # browsers play GIF delays under 2 cs as 10 cs, so faster runs drop frames
 SHEET_THUMBS = 12
 SHEET_COLUMNS = 4
@@ -65,18 +65,21 @@ _FRAME_NAME = re.compile(r"\d{6}\.png")
 # -- one frame -----------------------------------------------------------------------------------
 
 
-def trail_at(snapshots: Sequence[Snapshot], index: int, fps: float) -> np.ndarray:
-    """The end effector's path over the last ``TRAIL_SECONDS`` up to frame ``index``, (k, 2).
+def trail_at(scene: Scene, snapshots: Sequence[Snapshot], index: int) -> np.ndarray:
+    """The end effectors' paths over the last ``TRAIL_SECONDS`` up to frame ``index``, (m, k, 2):
+    a column per effector.
 
     Read from the snapshot list alone, so any frame can be drawn without drawing the others.
 
+    >>> scene = Scene("demo", np.zeros((0, 5)), np.zeros((0, 3)), np.full(1, 8.0), 10.0)
     >>> snaps = [Snapshot(i / 30, i, np.array([[0.0, 0.0], [i, 1.0]]), np.zeros(1), np.zeros(1))
     ...          for i in range(3)]
-    >>> trail_at(snaps, 2, 30.0).tolist()
-    [[0.0, 1.0], [1.0, 1.0], [2.0, 1.0]]
+    >>> trail_at(scene, snaps, 2).tolist()
+    [[[0.0, 1.0]], [[1.0, 1.0]], [[2.0, 1.0]]]
     """
-    start = max(0, index - _trail_frames(fps))
-    return np.array([snap.joints[-1] for snap in snapshots[start : index + 1]], dtype=float)
+    start = max(0, index - _trail_frames(scene.fps))
+    window = snapshots[start : index + 1]
+    return np.array([effector_positions(scene, snap) for snap in window], dtype=float)
 
 
 def _trail_frames(fps: float) -> int:
@@ -108,7 +111,7 @@ class _Job:
 
     def render(self, index: int, hud: bool = True) -> Image.Image:
         local = index - self.first
-        trail = trail_at(self.snapshots, local, self.scene.fps)
+        trail = trail_at(self.scene, self.snapshots, local)
         return render_snapshot(
             self.scene,
             self.snapshots[local],
@@ -415,7 +418,12 @@ def _write_frames(
         palette = None
         gif_writer = apng_writer = None
         if gif:
-            palette = build_palette(_sample_images(job, pool, samples), job.theme)
+            styles = job.theme.effector_styles(len(job.scene.effectors))
+            palette = build_palette(
+                _sample_images(job, pool, samples),
+                job.theme,
+                [c for style in styles for c in style.colors()],
+            )
             animations.append(out / "run.gif")
             gif_writer = GifWriter(files.enter_context(atomic_open(animations[-1])), size, palette)
             durations = gif_durations(

@@ -17,7 +17,7 @@ from typing import IO, Any
 import numpy as np
 
 from ikgame._files import atomic_open
-from ikgame.snapshot import Scene, Snapshot
+from ikgame.snapshot import Scene, Snapshot, effector_positions, link_segments
 
 __all__ = ["check_run", "motion_json", "write_motion"]
 
@@ -38,6 +38,12 @@ def motion_json(scene: Scene, snapshots: Sequence[Snapshot]) -> dict[str, Any]:
     the world positions of the joints (base first, end effector last), the target and the
     solver's status. Positions are world px with y up; NaN errors become null.
 
+    A tree's header also has ``parents`` (each link's parent, -1 for a root), ``effector_links``
+    and ``effector_names``; its ``joints`` are the link starts, then the link ends; and in place
+    of ``target`` each frame has ``effectors`` (each effector's position), ``targets`` (its
+    target, or null) and ``errors`` (px, or null), one entry per effector, while ``error`` is
+    the largest.
+
     >>> scene = Scene("demo", np.zeros((0, 5)), np.zeros((0, 3)), np.full(1, 8.0), 100.0)
     >>> snap = Snapshot(0.0, 0, np.array([[0.0, 0.0], [0.0, 100.0]]), np.array([1.5708]),
     ...                 np.array([1.5708]))
@@ -45,15 +51,20 @@ def motion_json(scene: Scene, snapshots: Sequence[Snapshot]) -> dict[str, Any]:
     >>> motion["link_lengths"], motion["frames"][0]["angles_deg"]
     ([100.0], [90.0002])
     """
-    return _motion_header(scene, snapshots) | {"frames": [_motion_frame(s) for s in snapshots]}
+    return _motion_header(scene, snapshots) | {
+        "frames": [_motion_frame(scene, s) for s in snapshots]
+    }
 
 
 def _motion_header(scene: Scene, snapshots: Sequence[Snapshot]) -> dict[str, Any]:
     """Everything in :func:`motion_json` but the frames."""
     check_run(scene, snapshots)
-    first = np.asarray(snapshots[0].joints, dtype=float)
-    lengths = np.linalg.norm(np.diff(first, axis=0), axis=1)
-    return {
+    starts, ends = link_segments(scene, snapshots[0])
+    lengths = np.linalg.norm(ends - starts, axis=1)
+    joints = "world positions: the base, each following joint, then the end effector"
+    if scene.is_tree:
+        joints = "world positions: where each link starts, then where each link ends"
+    header = {
         "format": "ikgame-motion",
         "version": 1,
         "level": scene.level_name,
@@ -64,18 +75,25 @@ def _motion_header(scene: Scene, snapshots: Sequence[Snapshot]) -> dict[str, Any
         "conventions": {
             "angles": "local joint angle of each link relative to its parent link, counter-clockwise",
             "world_angles": "each link's direction relative to +x, counter-clockwise",
-            "joints": "world positions: the base, each following joint, then the end effector",
+            "joints": joints,
         },
         "link_count": len(lengths),
         "link_lengths": [_round(v, 3) for v in lengths],
         "link_widths": [_round(v, 3) for v in np.asarray(scene.link_widths, dtype=float)],
     }
+    if scene.is_tree:
+        header |= {
+            "parents": [int(p) for p in scene.parents],
+            "effector_links": [int(i) for i in scene.effector_links],
+            "effector_names": list(scene.effector_names),
+        }
+    return header
 
 
-def _motion_frame(snap: Snapshot) -> dict[str, Any]:
+def _motion_frame(scene: Scene, snap: Snapshot) -> dict[str, Any]:
     angles = np.asarray(snap.angles, dtype=float)
     error = float(snap.error)
-    return {
+    frame = {
         "time": _round(snap.time, 6),
         "tick": int(snap.tick),
         "step_index": int(snap.step_index),
@@ -84,10 +102,31 @@ def _motion_frame(snap: Snapshot) -> dict[str, Any]:
         "world_angles_rad": [_round(a, 6) for a in np.asarray(snap.world_angles, dtype=float)],
         "joints": [[_round(x, 3), _round(y, 3)] for x, y in np.asarray(snap.joints, dtype=float)],
         "target": None if snap.target is None else [_round(v, 3) for v in snap.target],
-        "error": _round(error, 3) if math.isfinite(error) else None,
+        "error": _length(error),
         "solver_status": str(snap.solver_status),
         "torque_limited": [bool(v) for v in np.asarray(snap.torque_limited, dtype=bool)],
     }
+    if scene.is_tree:
+        del frame["target"]
+        frame |= {
+            "effectors": _points(effector_positions(scene, snap)),
+            "targets": _points(snap.target_points),
+            "errors": [_length(e) for e in snap.effector_errors],
+        }
+    return frame
+
+
+def _points(points: np.ndarray) -> list[list[float] | None]:
+    """``[x, y]`` per row, rounded; null for a row that is not finite."""
+    return [
+        [_round(x, 3), _round(y, 3)] if math.isfinite(x) and math.isfinite(y) else None
+        for x, y in np.asarray(points, dtype=float)
+    ]
+
+
+def _length(value: float) -> float | None:
+    """A distance, px, rounded; null when not finite."""
+    return _round(value, 3) if math.isfinite(value) else None
 
 
 def _round(value: float, digits: int) -> float:
@@ -102,7 +141,7 @@ def _write_motion(fp: IO[bytes], scene: Scene, snapshots: Sequence[Snapshot]) ->
     fp.write(f'{head[:-2]},\n  "frames": [\n    '.encode())
     for index, snap in enumerate(snapshots):
         separator = ",\n    " if index else ""
-        fp.write((separator + json.dumps(_motion_frame(snap), allow_nan=False)).encode())
+        fp.write((separator + json.dumps(_motion_frame(scene, snap), allow_nan=False)).encode())
     fp.write(b"\n  ]\n}\n")
 
 

@@ -9,6 +9,9 @@ grid, goals, obstacles) is drawn and shrunk once per run; each frame redraws onl
 its moving parts span, and shrinks and pastes only the tiles they touch: a trail or a dashed path
 that crosses the frame touches a diagonal band of tiles, not the rectangle around it. The HUD is
 drawn after the shrink so its text stays crisp.
+A tree is drawn link by link like a chain, with a joint where each link meets its parent; each
+of its end effectors has its own colour (:meth:`~ikgame.render.theme.Theme.effector_styles`) for
+its target marker, trail, tip and upcoming targets, and the HUD lists every effector's error.
 Links and props that carry a sprite are drawn as their images instead of their shapes
 (:func:`_draw_sprites`, with :mod:`ikgame.render.sprites`), over the shapes, under the crosshair.
 Translucent layers (goals, trail, faded targets) are blended with the background colour by hand
@@ -28,8 +31,8 @@ from PIL import Image, ImageDraw, ImageFont
 
 from ikgame.render.camera import Camera
 from ikgame.render.sprites import draw_sprite, sprite_corners
-from ikgame.render.theme import RGB, Theme
-from ikgame.snapshot import Scene, Snapshot, Sprite
+from ikgame.render.theme import RGB, EffectorStyle, Theme
+from ikgame.snapshot import Scene, Snapshot, Sprite, link_segments
 
 __all__ = ["render_snapshot", "to_draw_coords"]
 
@@ -43,6 +46,7 @@ TARGET_RADIUS = 9.0  # px, the crosshair ring
 UPCOMING_RADIUS = 5.5  # px, faded rings of targets still to come
 TRAIL_WIDTH = (1.0, 4.0)  # px, oldest and newest trail segment
 HUD_PANEL_ALPHA = 0.84  # the HUD panel over the scene
+HUD_EFFECTORS_PER_LINE = 4  # a tree's per-effector errors, this many to a HUD line
 MAX_SUPERSAMPLE = 8  # 8x of a 4K frame is already 2 GB of pixels
 DIRTY_TILE = 32  # output px: the side of the tiles a frame's moving parts mark for redrawing
 
@@ -72,8 +76,9 @@ def render_snapshot(
 ) -> Image.Image:
     """Draw one frame of a run as an RGB image of ``camera.size``.
 
-    ``trail`` is the end effector's recent path (k, 2), oldest first, drawn as a fading line.
-    Same inputs give the same pixels, byte for byte.
+    ``trail`` is the end effectors' recent path, oldest first, drawn as a fading line per
+    effector: (m, 2) for a single effector, or (m, k, 2) with a column per effector (points that
+    are not finite are skipped). Same inputs give the same pixels, byte for byte.
 
     >>> from ikgame.render.theme import load_theme
     >>> scene = Scene("demo", np.zeros((0, 5)), np.zeros((0, 3)), np.full(2, 8.0), 200.0)
@@ -86,9 +91,7 @@ def render_snapshot(
         raise ValueError(f"supersample must be an int, got {supersample!r}")
     if not 1 <= supersample <= MAX_SUPERSAMPLE:
         raise ValueError(f"supersample must be in 1..{MAX_SUPERSAMPLE}, got {supersample}")
-    joints = np.asarray(snapshot.joints, dtype=float)
-    if joints.ndim != 2 or joints.shape[1] != 2 or len(joints) < 2:
-        raise ValueError(f"snapshot.joints must have shape (n + 1, 2), n >= 1; got {joints.shape}")
+    link_segments(scene, snapshot)  # shape checks, before any drawing
 
     big = camera.scaled(supersample)
     static_big, static = _static_layers(scene, camera, theme, supersample)
@@ -118,14 +121,28 @@ def _draw_dynamic(
     painter: _Painter, scene: Scene, snapshot: Snapshot, trail: np.ndarray | None
 ) -> None:
     """Everything that moves, back to front."""
-    painter.upcoming_targets(scene, snapshot)
+    styles = painter.theme.effector_styles(len(scene.effectors))
+    targets = snapshot.target_points
+    if len(targets) != len(styles):
+        raise ValueError(
+            f"snapshot has {len(targets)} target rows for {len(styles)} effectors (a tree's "
+            "Snapshot.targets has one per effector, NaN where there is none)"
+        )
+    painter.upcoming_targets(scene, snapshot, styles)
     if trail is not None:
-        painter.trail(np.asarray(trail, dtype=float).reshape(-1, 2))
+        paths = np.asarray(trail, dtype=float)
+        paths = paths.reshape(-1, 1, 2) if paths.ndim < 3 else paths
+        if paths.shape[1:] != (len(styles), 2):
+            raise ValueError(f"trail has shape {paths.shape} for {len(styles)} effectors")
+        for j, style in enumerate(styles):
+            path = paths[:, j]
+            painter.trail(path[np.all(np.isfinite(path), axis=1)], style.trail)
     painter.props(scene, snapshot)
-    painter.chain(scene, snapshot)
+    painter.skeleton(scene, snapshot, styles)
     _draw_sprites(painter, scene, snapshot)
-    if snapshot.target is not None:
-        painter.crosshair(np.asarray(snapshot.target, dtype=float))
+    for target, style in zip(targets, styles, strict=True):
+        if np.all(np.isfinite(target)):
+            painter.crosshair(target, style.target)
 
 
 @lru_cache(maxsize=2)
@@ -337,20 +354,29 @@ class _Painter:
                 OBSTACLE_OUTLINE * ss,
             )
 
-    def upcoming_targets(self, scene: Scene, snapshot: Snapshot) -> None:
-        """Targets still to come, faded, joined by a dashed path."""
-        upcoming = _upcoming(scene, snapshot)
-        if not len(upcoming):
-            return
-        color, ss = self.theme.target_upcoming, self.ss
-        path = upcoming if snapshot.target is None else np.vstack([snapshot.target, upcoming])
-        points = self.px(path)
-        for a, b in zip(points[:-1], points[1:], strict=True):
-            _dashed(self.draw, a, b, color, self.frame, width=max(1, round(1.2 * ss)), dash=5 * ss)
-        for p in self.px(upcoming):
-            self.circle(p, UPCOMING_RADIUS * ss, self.theme.background, color, 2 * ss)
+    def upcoming_targets(
+        self, scene: Scene, snapshot: Snapshot, styles: Sequence[EffectorStyle]
+    ) -> None:
+        """Each effector's targets still to come, faded, joined by a dashed path."""
+        ss = self.ss
+        currents = snapshot.target_points
+        for j, style in enumerate(styles[: len(scene.target_lists)]):
+            upcoming = _upcoming(scene, snapshot, j)
+            if not len(upcoming):
+                continue
+            color, current = style.upcoming, currents[j]
+            known = np.all(np.isfinite(current))
+            path = np.vstack([current, upcoming]) if known else upcoming
+            points = self.px(path)
+            for a, b in zip(points[:-1], points[1:], strict=True):
+                _dashed(
+                    self.draw, a, b, color, self.frame, width=max(1, round(1.2 * ss)), dash=5 * ss
+                )
+            for p in self.px(upcoming):
+                self.circle(p, UPCOMING_RADIUS * ss, self.theme.background, color, 2 * ss)
 
-    def trail(self, trail: np.ndarray) -> None:
+    def trail(self, trail: np.ndarray, trail_color: RGB) -> None:
+        """A fading line along ``trail`` (k, 2), oldest first, toward ``trail_color``."""
         if len(trail) < 2:
             return
         points = self.px(trail)
@@ -358,7 +384,7 @@ class _Painter:
         lo, hi = TRAIL_WIDTH
         for i in range(count):
             age = (i + 1) / count  # 1 for the newest segment
-            color = _blend(self.theme.background, self.theme.trail, 0.15 + 0.85 * age**1.5)
+            color = _blend(self.theme.background, trail_color, 0.15 + 0.85 * age**1.5)
             radius = (lo + (hi - lo) * age) * self.ss / 2
             self.capsule(points[i], points[i + 1], radius, color)
 
@@ -402,34 +428,47 @@ class _Painter:
             else:
                 raise ValueError(f"unknown prop kind {shape.kind!r}; expected 'ball' or 'box'")
 
-    def chain(self, scene: Scene, snapshot: Snapshot) -> None:
+    def skeleton(self, scene: Scene, snapshot: Snapshot, styles: Sequence[EffectorStyle]) -> None:
+        """The links (a chain or a tree), their joints, the base and the effectors' tips."""
         theme, ss = self.theme, self.ss
-        points = self.px(snapshot.joints)
-        n = len(points) - 1
+        starts, ends = (self.px(points) for points in link_segments(scene, snapshot))
+        n = len(starts)
         widths = np.asarray(scene.link_widths, dtype=float).reshape(-1)
-        if len(widths) != n:
-            raise ValueError(f"scene has {len(widths)} link widths for a chain of {n} links")
         radii = np.maximum(widths * self.camera.scale, MIN_LINK_WIDTH * ss) / 2
         limited = np.asarray(snapshot.torque_limited, dtype=bool).reshape(-1)
         if len(limited) not in (0, n):
             raise ValueError(f"torque_limited has {len(limited)} entries for {n} links")
+        parents = scene.link_parents
+        roots = np.flatnonzero(parents < 0)
 
         skinned = _skinned(scene.link_sprites, n, "link")
-        self.mount(points[0], radii[0])
+        # One pedestal when every root hangs from one point; roots spread over a body hang from
+        # a body drawn as a bar between the two roots farthest apart.
+        if np.all(starts[roots] == starts[roots[0]]):
+            self.mount(starts[roots[0]], radii[roots[0]])
+        else:
+            hips = starts[roots]
+            apart = np.hypot(*(hips[:, None, :] - hips[None, :, :]).transpose(2, 0, 1))
+            a, b = np.unravel_index(np.argmax(apart), apart.shape)
+            body = 1.6 * float(radii[roots].max())
+            self.capsule(hips[a], hips[b], body + LINK_OUTLINE * ss, theme.link_outline)
+            self.capsule(hips[a], hips[b], body, theme.base)
         # All outlines first, so where links overlap at a joint the fills merge seamlessly.
         for i in np.flatnonzero(~skinned):
-            self.capsule(points[i], points[i + 1], radii[i] + LINK_OUTLINE * ss, theme.link_outline)
+            self.capsule(starts[i], ends[i], radii[i] + LINK_OUTLINE * ss, theme.link_outline)
         for i in np.flatnonzero(~skinned):
             fill = theme.torque_limited if len(limited) and limited[i] else theme.link
-            self.capsule(points[i], points[i + 1], radii[i], fill)
-        for i in range(1, n):
-            r = max(0.38 * min(radii[i - 1], radii[i]), 1.5 * ss)
-            self.circle(points[i], r, theme.joint, theme.link_outline, 1.0 * ss)
-        # The base pivot sits on top of link 0, like a bolt.
-        self.circle(points[0], max(0.55 * radii[0], 2 * ss), theme.base, theme.joint, 1.2 * ss)
-        self.circle(
-            points[-1], max(0.6 * radii[-1], 2.5 * ss), theme.effector, theme.link_outline, 1.2 * ss
-        )
+            self.capsule(starts[i], ends[i], radii[i], fill)
+        for i in np.flatnonzero(parents >= 0):
+            r = max(0.38 * min(radii[parents[i]], radii[i]), 1.5 * ss)
+            self.circle(starts[i], r, theme.joint, theme.link_outline, 1.0 * ss)
+        # The base pivot sits on top of each root link, like a bolt.
+        for i in roots:
+            self.circle(starts[i], max(0.55 * radii[i], 2 * ss), theme.base, theme.joint, 1.2 * ss)
+        for i, style in zip(scene.effectors, styles, strict=True):
+            self.circle(
+                ends[i], max(0.6 * radii[i], 2.5 * ss), style.tip, theme.link_outline, 1.2 * ss
+            )
 
     def sprite(self, sprite: Sprite, point: np.ndarray, angle: float) -> None:
         """``sprite`` with its pivot on world ``point``, turned by ``angle`` (world radians)."""
@@ -460,8 +499,8 @@ class _Painter:
                 width=max(1, round(ss)),
             )
 
-    def crosshair(self, target: np.ndarray) -> None:
-        color, ss = self.theme.target, self.ss
+    def crosshair(self, target: np.ndarray, color: RGB) -> None:
+        ss = self.ss
         c = self.px(target)[0]
         r = TARGET_RADIUS * ss
         self.circle(c, r, None, color, 2.0 * ss)
@@ -485,11 +524,11 @@ def _draw_sprites(painter: _Painter, scene: Scene, snapshot: Snapshot) -> None:
     for sprite, (x, y, angle) in zip(scene.prop_sprites, poses, strict=False):
         if sprite is not None:
             painter.sprite(sprite, np.array([x, y]), angle)
-    joints = np.asarray(snapshot.joints, dtype=float)
+    starts, ends = link_segments(scene, snapshot)
     for i, sprite in enumerate(scene.link_sprites):
         if sprite is not None:
-            (ax, ay), (bx, by) = joints[i], joints[i + 1]
-            painter.sprite(sprite, joints[i], math.atan2(by - ay, bx - ax))
+            (ax, ay), (bx, by) = starts[i], ends[i]
+            painter.sprite(sprite, starts[i], math.atan2(by - ay, bx - ax))
 
 
 def _skinned(sprites: tuple[Sprite | None, ...], count: int, what: str) -> np.ndarray:
@@ -499,21 +538,26 @@ def _skinned(sprites: tuple[Sprite | None, ...], count: int, what: str) -> np.nd
     return np.array([s is not None for s in sprites] or [False] * count, dtype=bool)
 
 
-def _upcoming(scene: Scene, snapshot: Snapshot) -> np.ndarray:
-    """The scene's targets after the current one, (k, 2).
+def _upcoming(scene: Scene, snapshot: Snapshot, effector: int = 0) -> np.ndarray:
+    """The targets of effector number ``effector`` still to come after its current one, (t, 2).
 
-    ``scene.targets`` lists the reach steps' targets only, so a step index does not say where
-    in the list the run is: the current target is found in the list instead. When it is not
-    there (a follow step), the list is taken as one target per step if the counts agree, and
-    nothing is marked otherwise rather than marking a target already done.
+    The lists hold the reach steps' targets only, so a step index does not say where in a list
+    the run is: the current target is found in the list instead. When it is not there (a follow
+    step), a chain's list is taken as one target per step if the counts agree, and nothing is
+    marked otherwise rather than marking a target already done. A tree's effector that has no
+    target yet has its whole list still to come.
     """
-    targets = np.asarray(scene.targets, dtype=float).reshape(-1, 2)
+    targets = scene.target_lists[effector]
     if snapshot.step_index >= scene.step_count or not len(targets):
         return targets[:0]
-    if snapshot.target is not None:
-        hits = np.flatnonzero(np.all(np.isclose(targets, snapshot.target), axis=1))
+    current = snapshot.target_points[effector]
+    aimed = bool(np.all(np.isfinite(current)))
+    if aimed:
+        hits = np.flatnonzero(np.all(np.isclose(targets, current), axis=1))
         if len(hits):
             return targets[hits[0] + 1 :]
+    if scene.is_tree:
+        return targets[:0] if aimed else targets
     if len(targets) == scene.step_count:
         return targets[snapshot.step_index + 1 :]
     return targets[:0]
@@ -623,15 +667,44 @@ def _hud_lines(scene: Scene, snapshot: Snapshot, theme: Theme) -> list[list[tupl
     limited = int(np.count_nonzero(snapshot.torque_limited))
     if limited:
         status.append((f"   {limited} at torque limit", theme.torque_limited))
-    return [[(scene.level_name, theme.hud_text)], stats, status]
+    return [
+        [(scene.level_name, theme.hud_text)],
+        stats,
+        *_effector_lines(scene, snapshot, theme),
+        status,
+    ]
+
+
+def _effector_lines(scene: Scene, snapshot: Snapshot, theme: Theme) -> list[list[tuple[str, RGB]]]:
+    """Each effector's name, in its colour, and its error, px, a few to a line; none for a
+    lone effector, whose error the line above already shows."""
+    names = scene.effector_names
+    if len(names) < 2:
+        return []
+    errors = snapshot.effector_errors
+    if len(errors) != len(names):
+        raise ValueError(f"snapshot has {len(errors)} errors for {len(names)} effectors")
+    runs = []
+    for name, error, style in zip(names, errors, theme.effector_styles(len(names)), strict=True):
+        shown = f"{error:.1f}" if math.isfinite(error) else "-"
+        runs.append([(name, style.target), (f" {shown}", theme.hud_text)])
+    step = HUD_EFFECTORS_PER_LINE
+    lines = []
+    for start in range(0, len(runs), step):
+        line: list[tuple[str, RGB]] = []
+        for k, run in enumerate(runs[start : start + step]):
+            line += ([("   ", theme.hud_text)] if k else []) + run
+        lines.append(line)
+    lines[-1].append((" px", theme.hud_text))
+    return lines
 
 
 def _draw_hud(image: Image.Image, scene: Scene, snapshot: Snapshot, theme: Theme) -> None:
     """A translucent panel in the top-left corner with the run's vital numbers."""
     height = image.size[1]
     pad = max(3, round(height * 0.018))
-    sizes = [max(9, round(height * 0.032))] + [max(8, round(height * 0.026))] * 2
     lines = _hud_lines(scene, snapshot, theme)
+    sizes = [max(9, round(height * 0.032))] + [max(8, round(height * 0.026))] * (len(lines) - 1)
     draw = ImageDraw.Draw(image)
     widths, heights = [], []
     for line, size in zip(lines, sizes, strict=True):

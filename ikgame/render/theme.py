@@ -1,8 +1,9 @@
 """Colour palettes for the renderer, loaded from JSON so artists can add one without code.
 
 A theme file maps every :class:`Theme` field to a colour, written ``"#rrggbb"`` or
-``[r, g, b]``; ``name`` and ``description`` keys are allowed and ignored. Shipped themes live in
-``assets/themes/<name>.json``.
+``[r, g, b]``, except ``effector_palette``: an optional list of colours, one per end effector of a
+tree (default: :data:`EFFECTOR_PALETTE`). ``name`` and ``description`` keys are allowed and
+ignored. Shipped themes live in ``assets/themes/<name>.json``.
 """
 
 from __future__ import annotations
@@ -10,14 +11,36 @@ from __future__ import annotations
 import json
 import os
 import re
-from dataclasses import dataclass, fields
+from dataclasses import astuple, dataclass, fields
 from pathlib import Path
 
 import ikgame
 
-__all__ = ["RGB", "Theme", "ThemeError", "available_themes", "load_theme", "THEMES_DIR"]
+__all__ = [
+    "EFFECTOR_PALETTE",
+    "RGB",
+    "EffectorStyle",
+    "Theme",
+    "ThemeError",
+    "available_themes",
+    "load_theme",
+    "THEMES_DIR",
+]
 
 RGB = tuple[int, int, int]
+
+EFFECTOR_PALETTE: tuple[RGB, ...] = (
+    (213, 94, 0),
+    (204, 121, 167),
+    (0, 158, 115),
+    (230, 159, 0),
+    (86, 180, 233),
+    (0, 0, 0),
+)
+"""Okabe and Ito's colours, told apart with every common colour-vision deficiency (the green
+third: the first two stay clear of a goal region's usual green): the effector colours of a theme
+file that names none."""
+UPCOMING_FADE = 0.45  # opacity of a tree effector's colour over the background, for its upcoming
 
 # The repo is installed editable, so assets sit beside the package rather than inside it.
 THEMES_DIR = Path(ikgame.__file__).resolve().parent.parent / "assets" / "themes"
@@ -56,14 +79,62 @@ class Theme:
     hud_panel: RGB
     success: RGB
     failure: RGB
+    effector_palette: tuple[RGB, ...] = EFFECTOR_PALETTE
+
+    def __post_init__(self) -> None:
+        if not self.effector_palette:
+            raise ValueError("effector_palette needs at least one colour")
 
     def colors(self) -> list[RGB]:
-        """Every colour of the theme, in field order.
+        """Every single colour of the theme, in field order (not the effector palette: see
+        :meth:`effector_styles`).
 
         >>> len(load_theme("dark").colors())
         21
         """
-        return [getattr(self, f.name) for f in fields(self)]
+        return [getattr(self, name) for name in _COLOUR_NAMES]
+
+    def effector_styles(self, count: int) -> tuple[EffectorStyle, ...]:
+        """The colours of ``count`` end effectors. A lone effector (a chain's tip) keeps the
+        theme's ``target``, ``trail``, ``effector`` and ``target_upcoming``; several take one
+        palette colour each (in turn, if there are more effectors than colours) for their
+        marker, trail and tip alike, so each effector's things read as one.
+
+        >>> light = load_theme("light")
+        >>> light.effector_styles(1)[0].target == light.target
+        True
+        >>> [s.target for s in light.effector_styles(2)] == list(light.effector_palette[:2])
+        True
+        """
+        if count == 1:
+            return (EffectorStyle(self.target, self.trail, self.effector, self.target_upcoming),)
+        styles = []
+        for j in range(count):
+            color = self.effector_palette[j % len(self.effector_palette)]
+            faded = tuple(
+                round(b + (c - b) * UPCOMING_FADE)
+                for b, c in zip(self.background, color, strict=True)
+            )
+            styles.append(EffectorStyle(color, color, color, faded))  # type: ignore[arg-type]
+        return tuple(styles)
+
+
+@dataclass(frozen=True)
+class EffectorStyle:
+    """The colours of one end effector: its target marker, its trail, the dot on its tip, and
+    its upcoming targets."""
+
+    target: RGB
+    trail: RGB
+    tip: RGB
+    upcoming: RGB
+
+    def colors(self) -> list[RGB]:
+        """The four colours, in field order."""
+        return list(astuple(self))
+
+
+_COLOUR_NAMES = tuple(f.name for f in fields(Theme) if f.name != "effector_palette")
 
 
 def available_themes() -> list[str]:
@@ -134,8 +205,8 @@ class ThemeError(ValueError):
 def _theme_from_dict(data: object, path: Path, source: str) -> Theme:
     if not isinstance(data, dict):
         raise ThemeError(path, 1, "", "expected a JSON object of colours")
-    names = [f.name for f in fields(Theme)]
-    unknown = sorted(set(data) - set(names) - _INFO_KEYS)
+    names = list(_COLOUR_NAMES)
+    unknown = sorted(set(data) - set(names) - {"effector_palette"} - _INFO_KEYS)
     if unknown:
         raise ThemeError(
             path,
@@ -152,7 +223,17 @@ def _theme_from_dict(data: object, path: Path, source: str) -> Theme:
             colours[name] = _parse_color(data[name])
         except ValueError as exc:
             raise ThemeError(path, _key_line(source, name), name, str(exc)) from None
-    return Theme(**colours)
+    palette = EFFECTOR_PALETTE
+    if "effector_palette" in data:
+        line = _key_line(source, "effector_palette")
+        value = data["effector_palette"]
+        if not isinstance(value, list) or not value:
+            raise ThemeError(path, line, "effector_palette", "expected a non-empty list of colours")
+        try:
+            palette = tuple(_parse_color(c) for c in value)
+        except ValueError as exc:
+            raise ThemeError(path, line, "effector_palette", str(exc)) from None
+    return Theme(**colours, effector_palette=palette)
 
 
 def _key_line(source: str, key: str) -> int | None:

@@ -40,6 +40,7 @@ def generated_level(rng: random.Random) -> dict[str, Any]:
     consistent where the schema cannot say it (goals name existing props)."""
     level = _value(rng, _SCHEMA)
     level.setdefault("world", {})
+    _make_chain(rng, level)
     _make_cheap(rng, level)
     props = level.get("props", [])
     for i, prop in enumerate(props):
@@ -52,9 +53,9 @@ def generated_level(rng: random.Random) -> dict[str, Any]:
     level["goals"] = goals
     for step in level["script"]:
         if "set" in step:
-            if not {"gravity", "solver", "gain", "base"} & set(step["set"]):
+            if not {"gravity", "solver", "gain", "base", "angle"} & set(step["set"]):
                 step["set"]["gain"] = 5.0
-            if "base" not in step["set"]:
+            if not {"base", "angle"} & set(step["set"]):
                 step["set"].pop("over", None)
     # The orderings and names the schema cannot express: a careless user gets these wrong now
     # and then, the mutations cover that.
@@ -81,6 +82,20 @@ def generated_level(rng: random.Random) -> dict[str, Any]:
     if all("set" in step for step in level["script"]) or "set" in level["script"][-1]:
         level["script"].append({"wait": 0.5})
     return level
+
+
+def _make_chain(rng: random.Random, level: dict[str, Any]) -> None:
+    """Make the level a chain of links whose script aims its tip at points, as a chain level
+    is written; tests/level covers trees, effector names and gaits, which runs do not play."""
+    chain = level["chain"]
+    chain.pop("bones", None)
+    if not chain.get("links"):
+        chain["links"] = [_value(rng, _DEFS["LinkConfig"])]
+    level.pop("gait", None)
+    for step in level["script"]:
+        if isinstance(step.get("reach"), dict):
+            step["reach"] = [round(rng.uniform(-200.0, 200.0), 3) for _ in range(2)]
+        step.pop("effector", None)
 
 
 def _ordered(region: list[float]) -> list[float]:
@@ -113,7 +128,7 @@ def _value(rng: random.Random, node: dict[str, Any]) -> Any:
     if "anyOf" in node:
         options = [o for o in node["anyOf"] if o.get("type") != "null"]
         return _value(rng, rng.choice(options))
-    if "oneOf" in node:
+    if "oneOf" in node and "type" not in node:
         return _value(rng, rng.choice(node["oneOf"]))
     if "const" in node:
         return node["const"]
@@ -122,8 +137,13 @@ def _value(rng: random.Random, node: dict[str, Any]) -> Any:
     kind = node.get("type")
     if kind == "object":
         out = {}
+        # A table that needs one of several keys says which in its alternatives.
+        required = {
+            *node.get("required", ()),
+            *rng.choice(node.get("oneOf", [{}])).get("required", ()),
+        }
         for key, sub in node.get("properties", {}).items():
-            if key in node.get("required", ()) or rng.random() < 0.5:
+            if key in required or rng.random() < 0.5:
                 value = _value(rng, sub)
                 if value is not None:
                     out[key] = value

@@ -15,9 +15,11 @@ from hypothesis import strategies as st
 
 from ikgame.kinematics import (
     SOLVERS,
+    TARGET_SOLVERS,
     RobustSolver,
     Skeleton,
     SolveStatus,
+    TargetSet,
     forward_kinematics,
 )
 from ikgame.kinematics.recovery import RESTART_BUDGET, STILL_CALLS
@@ -427,3 +429,114 @@ def test_any_target_from_any_start_gives_a_sound_answer(name, data, target, tole
         else:
             assert sol.error > tolerance - 1e-9
         angles = sol.angles
+
+
+# -- several targets on a tree ------------------------------------------------------------------
+
+
+def _tree_ends(skeleton: Skeleton, angles: np.ndarray, links) -> np.ndarray:
+    points = forward_kinematics(skeleton, angles)[0]
+    return (points[1:] if skeleton.is_chain else points[skeleton.count :])[links]
+
+
+def _two_elbow_arms() -> tuple[Skeleton, TargetSet]:
+    """Two copies of the elbow arm on one body, 200 px apart; one target behind each arm's
+    stop (the base must go round to +100 deg), the other in easy reach."""
+    arm, _ = _elbow_arm()
+    limits = [(float(a), float(b)) for a, b in zip(arm.lower, arm.upper, strict=True)] * 2
+    tree = Skeleton.tree(
+        [120.0, 100.0, 80.0] * 2,
+        [-1, 0, 1, -1, 3, 4],
+        limits=limits,
+        root_offsets=[(-100, 0), (0, 0), (0, 0), (100, 0), (0, 0), (0, 0)],
+    )
+    goal = np.array([r(100), r(120), r(-30), r(10), r(40), r(-40)])
+    return tree, TargetSet([2, 5], _tree_ends(tree, goal, [2, 5]))
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_a_tree_gets_every_arm_out_of_its_trap(name):
+    tree, targets = _two_elbow_arms()
+    raw = TARGET_SOLVERS[name](tree, tree.lower, targets, max_iterations=1000, tolerance=TOLERANCE)
+    assert raw.status is not SolveStatus.SUCCESS
+    robust = RobustSolver(tree, name)
+    angles = tree.lower
+    for _ in range(STILL_CALLS + 3):
+        sol = robust.solve_targets(angles, targets, max_iterations=10, tolerance=TOLERANCE)
+        assert sol.iterations <= 10 + RESTART_BUDGET
+        assert np.all(sol.angles >= tree.lower) and np.all(sol.angles <= tree.upper)
+        reached = _tree_ends(tree, sol.angles, targets.links)
+        np.testing.assert_allclose(sol.errors, np.hypot(*(reached - targets.points).T))
+        angles = sol.angles
+        if sol.status is SolveStatus.SUCCESS:
+            break
+    assert sol.status is SolveStatus.SUCCESS
+    assert sol.angles[0] > r(90)
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_a_chain_tip_through_solve_targets_is_solve(name):
+    rng = np.random.default_rng(41)
+    for _ in range(20):
+        chain, start, target = _case(rng)
+        one, other = RobustSolver(chain, name), RobustSolver(chain, name)
+        angles_one = angles_other = start
+        for _ in range(8):
+            a = one.solve(angles_one, target, max_iterations=10, tolerance=TOLERANCE)
+            b = other.solve_targets(
+                angles_other,
+                TargetSet([chain.count - 1], [target]),
+                max_iterations=10,
+                tolerance=TOLERANCE,
+            )
+            np.testing.assert_array_equal(a.angles, b.angles)
+            assert (a.status, a.iterations, a.error) == (b.status, b.iterations, b.error)
+            assert b.errors.tolist() == [a.error]
+            angles_one, angles_other = a.angles, b.angles
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_conflicting_targets_fail_once_then_cost_nothing(name):
+    fork = Skeleton.tree([60.0, 40.0, 40.0], [-1, 0, 0])
+    targets = TargetSet([1, 2], [(110.0, 70.0), (110.0, -70.0)], weights=[1.0, 3.0])
+    robust = RobustSolver(fork, name, budget=400)
+    angles = np.array([0.1, 0.2, -0.2])
+    for _ in range(STILL_CALLS + 10):
+        sol = robust.solve_targets(angles, targets, max_iterations=50, tolerance=TOLERANCE)
+        angles = sol.angles
+        if sol.status is SolveStatus.FAILURE:
+            break
+    assert sol.status is SolveStatus.FAILURE
+    plain = TARGET_SOLVERS[name](
+        fork, np.array([0.1, 0.2, -0.2]), targets, max_iterations=3000, tolerance=TOLERANCE
+    )
+    weighted = targets.weights @ sol.errors**2
+    assert weighted <= targets.weights @ plain.errors**2 * (1 + 1e-6)
+    again = robust.solve_targets(angles, targets, max_iterations=50, tolerance=TOLERANCE)
+    assert again.iterations == 0 and again.status is SolveStatus.FAILURE
+    np.testing.assert_array_equal(again.angles, sol.angles)
+
+
+def test_a_tree_is_solved_by_solve_targets_only():
+    tree, targets = _two_elbow_arms()
+    robust = RobustSolver(tree)
+    with pytest.raises(ValueError, match="use solve_targets"):
+        robust.solve(tree.lower, (0.0, 100.0))
+    with pytest.raises(ValueError, match="targets must be a TargetSet"):
+        robust.solve_targets(tree.lower, (0.0, 100.0))  # type: ignore[arg-type]
+    with pytest.raises(ValueError, match="target links must be < 6"):
+        robust.solve_targets(tree.lower, TargetSet([6], [(0.0, 0.0)]))
+
+
+def test_a_moved_tree_is_solved_again():
+    tree, targets = _two_elbow_arms()
+    robust = RobustSolver(tree, "dls")
+    goal = np.array([r(10), r(40), r(-40), r(10), r(40), r(-40)])
+    easy = TargetSet([2, 5], _tree_ends(tree, goal, [2, 5]))
+    sol = robust.solve_targets(tree.clamp(goal + 0.05), easy, tolerance=TOLERANCE)
+    assert sol.status is SolveStatus.SUCCESS
+    robust.skeleton = tree.moved_to((0.0, 30.0))
+    moved = robust.solve_targets(sol.angles, easy, tolerance=TOLERANCE)
+    assert moved.iterations > 0 and moved.status is SolveStatus.SUCCESS
+    reached = _tree_ends(robust.skeleton, moved.angles, easy.links)
+    assert np.all(np.hypot(*(reached - easy.points).T) <= TOLERANCE)

@@ -286,3 +286,124 @@ def test_moved_to_changes_only_the_base():
         skeleton.moved_to((np.nan, 0.0))
     with pytest.raises(ValueError, match="read-only"):
         moved.base[0] = 0.0
+
+
+# -- trees: structure, root offsets, forward kinematics ------------------------------------------
+
+HIPS = Skeleton.tree(
+    [50.0, 40.0, 50.0, 40.0, 30.0],
+    [-1, 0, -1, 2, 2],
+    root_offsets=[(-30.0, 0.0), (0.0, 0.0), (30.0, 10.0), (0.0, 0.0), (0.0, 0.0)],
+)
+
+
+def test_tree_structure():
+    assert HIPS.children == ((1,), (), (3, 4), (), ())
+    assert HIPS.effectors.tolist() == [1, 3, 4]
+    assert HIPS.roots.tolist() == [0, 0, 2, 2, 2]
+    assert HIPS.ancestors.astype(int).tolist() == [
+        [1, 0, 0, 0, 0],
+        [1, 1, 0, 0, 0],
+        [0, 0, 1, 0, 0],
+        [0, 0, 1, 1, 0],
+        [0, 0, 1, 0, 1],
+    ]
+    assert not HIPS.is_chain and HIPS.has_root_offsets
+    for name in ("effectors", "ancestors", "roots", "root_offsets"):
+        assert not getattr(HIPS, name).flags.writeable
+
+
+def test_a_chain_has_one_effector_and_zero_root_offsets():
+    chain = Skeleton.chain([1.0, 2.0, 3.0])
+    assert chain.effectors.tolist() == [2]
+    assert chain.root_offsets.tolist() == [[0.0, 0.0]] * 3
+    assert not chain.has_root_offsets
+
+
+def test_tree_limits_are_in_link_order():
+    tree = Skeleton.tree([1.0, 1.0], [-1, 0], limits=[None, (-0.5, 0.25)])
+    assert tree.lower.tolist() == [-np.inf, -0.5]
+    assert tree.upper.tolist() == [np.inf, 0.25]
+
+
+def test_fk_root_offsets_sit_in_the_base_frame():
+    # Base turned a quarter: the offset's x points up, its y to the left (-x).
+    tree = Skeleton.tree(
+        [10.0, 10.0],
+        [-1, -1],
+        base=(100.0, 0.0),
+        base_angle=HALF_PI,
+        root_offsets=[(5.0, 0.0), (0.0, 3.0)],
+    )
+    points, world = forward_kinematics(tree, np.array([0.0, -HALF_PI]))
+    np.testing.assert_allclose(points, [[100, 5], [97, 0], [100, 15], [107, 0]], atol=1e-12)
+    np.testing.assert_allclose(world, [HALF_PI, 0.0])
+
+
+def test_fk_chain_with_a_root_offset_starts_there():
+    chain = Skeleton.tree([10.0, 10.0], [-1, 0], base=(1.0, 2.0), root_offsets=[(3, 4), (0, 0)])
+    points, _ = forward_kinematics(chain, np.zeros(2))
+    np.testing.assert_allclose(points, [[4, 6], [14, 6], [24, 6]])
+
+
+def test_fk_of_random_trees_matches_a_walk_link_by_link():
+    rng = np.random.default_rng(17)
+    for _ in range(50):
+        n = int(rng.integers(1, 15))
+        parents = [-1] + [int(rng.integers(-1, i)) for i in range(1, n)]
+        offsets = rng.normal(0, 20, (n, 2)) * (np.array(parents) < 0)[:, None]
+        base_angle = float(rng.uniform(-4, 4))
+        tree = Skeleton.tree(
+            rng.uniform(1, 50, n),
+            parents,
+            base=rng.normal(0, 50, 2),
+            base_angle=base_angle,
+            root_offsets=offsets,
+        )
+        angles = rng.uniform(-4, 4, n)
+        rotation = np.array(
+            [
+                [math.cos(base_angle), -math.sin(base_angle)],
+                [math.sin(base_angle), math.cos(base_angle)],
+            ]
+        )
+        starts, ends, world = np.zeros((n, 2)), np.zeros((n, 2)), np.zeros(n)
+        for i, p in enumerate(parents):
+            starts[i] = tree.base + rotation @ offsets[i] if p < 0 else ends[p]
+            world[i] = (base_angle if p < 0 else world[p]) + angles[i]
+            ends[i] = starts[i] + tree.lengths[i] * np.array(
+                [math.cos(world[i]), math.sin(world[i])]
+            )
+        points, got_world = forward_kinematics(tree, angles)
+        np.testing.assert_allclose(got_world, world, atol=1e-12)
+        if tree.is_chain:
+            np.testing.assert_allclose(points, np.vstack((starts[:1], ends)), atol=1e-9)
+        else:
+            np.testing.assert_allclose(points, np.vstack((starts, ends)), atol=1e-9)
+
+
+def test_reach_counts_the_root_offsets():
+    tree = Skeleton.tree([10.0, 10.0], [-1, -1], root_offsets=[(3, 4), (0, 1)])
+    assert tree.reach == pytest.approx(15.0)
+    points, _ = forward_kinematics(tree, np.array([0.9, -0.3]))
+    assert np.all(np.hypot(*(points - tree.base).T) <= tree.reach + 1e-9)
+
+
+def test_moved_to_keeps_the_root_offsets():
+    moved = HIPS.moved_to((10.0, 20.0))
+    assert moved.root_offsets is HIPS.root_offsets
+    np.testing.assert_allclose(moved.root_points()[0], [-20.0, 20.0])
+
+
+@pytest.mark.parametrize(
+    ("offsets", "message"),
+    [
+        ([(0.0, 0.0)], r"root_offsets must have shape \(2, 2\), got shape \(1, 2\)"),
+        ([(0.0, 0.0), (1.0, 0.0)], r"root_offsets must be zero for links with a parent"),
+        ([(np.nan, 0.0), (0.0, 0.0)], r"root_offsets must be finite"),
+        ("far", r"root_offsets must be \(x, y\) rows of numbers"),
+    ],
+)
+def test_bad_root_offsets_are_refused(offsets, message):
+    with pytest.raises(ValueError, match=message):
+        Skeleton.tree([1.0, 1.0], [-1, 0], root_offsets=offsets)

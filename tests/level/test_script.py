@@ -190,3 +190,118 @@ def test_outcome_keys_are_in_a_stable_order():
         "note",
     ]
     assert math.isclose(runner.outcomes[0].as_dict()["score"], 100 * (0.5 + 0.5 * 0.875))
+
+
+def _play_tree(runner: ScriptRunner, positions, seconds: float, dt: float = 0.01) -> list:
+    """Observe ``positions(time, targets) -> {name: point}`` every ``dt`` until done or
+    ``seconds`` pass; returns the targets seen before each tick."""
+    time, seen = 0.0, []
+    while not runner.done and time < seconds - 1e-9:
+        targets = runner.targets
+        time = round(time + dt, 9)
+        seen.append({name: point.copy() for name, point in targets.items()})
+        runner.observe(
+            time, dt, {n: np.asarray(p, float) for n, p in positions(time, targets).items()}
+        )
+    return seen
+
+
+def test_a_reach_of_several_effectors_passes_when_all_are_within_tolerance_together():
+    step = ReachStep(reach={"left": (0.0, 0.0), "right": (10.0, 0.0)}, hold=0.1, tolerance=1.0)
+    runner = ScriptRunner([step], effectors=("left", "right"))
+
+    def positions(time, targets):  # the left hand arrives at 0.2 s, the right one at 0.5 s
+        return {
+            "left": (0.0, 0.0) if time >= 0.2 - 1e-9 else (0.0, 5.0),
+            "right": (10.0, 0.5) if time >= 0.5 - 1e-9 else (10.0, 3.0),
+        }
+
+    _play_tree(runner, positions, 2.0)
+    (outcome,) = runner.outcomes
+    assert outcome.reached and outcome.time_to_reach == pytest.approx(0.5)
+    assert outcome.ended == pytest.approx(0.6)
+    assert outcome.effectors == ("left", "right")
+    assert outcome.final_errors == pytest.approx((0.0, 0.5))
+    assert outcome.final_error == pytest.approx(0.5)
+    data = outcome.as_dict()
+    assert list(data)[-2:] == ["effectors", "final_errors"]
+    assert data["effectors"] == ["left", "right"] and data["final_errors"] == [0.0, 0.5]
+
+
+def test_a_reach_of_several_effectors_times_out_with_the_largest_error():
+    step = ReachStep(reach={"a": (0.0, 0.0), "b": (0.0, 0.0)}, timeout=0.5)
+    runner = ScriptRunner([step], effectors=("a", "b"))
+    _play_tree(runner, lambda t, _: {"a": (0.0, 1.0), "b": (3.0, 4.0)}, 1.0)
+    (outcome,) = runner.outcomes
+    assert not outcome.reached and outcome.note == "timed out"
+    assert outcome.final_error == pytest.approx(5.0)
+    assert outcome.final_errors == pytest.approx((1.0, 5.0))
+
+
+def test_targets_are_sticky_until_a_later_step_sets_them_again():
+    script = [
+        ReachStep(reach={"a": (1.0, 0.0), "b": (2.0, 0.0)}, hold=0.0),
+        _follow("line", from_=(0, 5), to=(10, 5), duration=0.5, lead_in=0.0, effector="b"),
+        ReachStep(reach={"a": (7.0, 7.0)}, hold=0.0),
+        WaitStep(wait=0.2),
+    ]
+    runner = ScriptRunner(script, effectors=("a", "b", "c"))
+    seen = _play_tree(runner, lambda t, targets: targets, 3.0)
+    # "c" is never aimed: it holds its pose.
+    assert {n: p.tolist() for n, p in seen[0].items()} == {"a": [1.0, 0.0], "b": [2.0, 0.0]}
+    during_follow = seen[5]
+    assert during_follow["a"].tolist() == [1.0, 0.0] and during_follow["b"][1] == 5.0
+    assert {n: p.tolist() for n, p in runner.targets.items()} == {"a": [7.0, 7.0], "b": [10.0, 5.0]}
+    assert [o.passed for o in runner.outcomes] == [True, True, True, True]
+    assert [o.effectors for o in runner.outcomes] == [("a", "b"), ("b",), ("a",), ()]
+
+
+def test_a_sequence_naming_its_effector_reaches_with_that_one():
+    script = [SequenceStep(sequence=[(1.0, 0.0), (2.0, 0.0)], hold=0.0, effector="b")]
+    runner = ScriptRunner(script, effectors=("a", "b"))
+    _play_tree(runner, lambda t, targets: {"a": (9.0, 9.0), **targets}, 1.0)
+    assert [(o.kind, o.passed, o.effectors) for o in runner.outcomes] == [
+        ("reach", True, ("b",)),
+        ("reach", True, ("b",)),
+    ]
+
+
+def test_a_chain_observed_by_name_or_by_its_tip_alone_scores_the_same():
+    def script():
+        return [
+            ReachStep(reach=(3.0, 4.0), hold=0.2),
+            _follow("circle", center=(0, 0), radius=5, period=1, duration=1, lead_in=0.1),
+            SequenceStep(sequence=[(1.0, 1.0)], hold=0.0, effector="tip"),
+        ]
+
+    def tip(time):
+        return np.array([5.0 * math.cos(3.0 * time), 5.0 * math.sin(2.0 * time)])
+
+    by_point, by_name = ScriptRunner(script()), ScriptRunner(script())
+    time = 0.0
+    while not by_point.done and time < 10.0:
+        assert np.array_equal(by_point.target, by_name.targets["tip"])
+        time = round(time + 0.01, 9)
+        by_point.observe(time, 0.01, tip(time))
+        by_name.observe(time, 0.01, {"tip": tip(time)})
+    outcomes = [o.as_dict() for o in by_point.finish(time)]
+    assert outcomes == [o.as_dict() for o in by_name.finish(time)]
+    assert all("effectors" not in o for o in outcomes)
+
+
+def test_a_tree_with_one_effector_has_a_chain_shaped_target_and_names_it_in_outcomes():
+    runner = ScriptRunner([ReachStep(reach=(0.0, 10.0), hold=0.0)], effectors=("foot",))
+    assert runner.target.tolist() == [0.0, 10.0]
+    runner.observe(0.1, 0.1, np.array([0.0, 9.0]))
+    assert runner.outcomes[0].effectors == ("foot",)
+
+
+def test_a_script_of_several_effectors_needs_them_named():
+    runner = ScriptRunner([ReachStep(reach={"a": (0.0, 1.0)})], effectors=("a", "b"))
+    assert runner.target is None
+    with pytest.raises(ValueError, match="observe them by name"):
+        runner.observe(0.1, 0.1, np.zeros(2))
+    with pytest.raises(ValueError, match="this chain has several"):
+        ScriptRunner([ReachStep(reach=(0.0, 1.0))], effectors=("a", "b"))
+    with pytest.raises(ValueError, match='name it: effector = "name"'):
+        ScriptRunner([_follow("line", from_=(0, 0), to=(1, 0), duration=1.0)], effectors=("a", "b"))

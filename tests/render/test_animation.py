@@ -72,3 +72,19 @@ def test_quantizer_keeps_palette_colours_exact_and_maps_others_to_the_nearest():
     image = Image.new("RGB", (3, 1))
     image.putdata([(10, 20, 30), (11, 20, 30), (190, 205, 199)])
     assert list(animation._Quantizer(palette).indices(image)) == [0, 2, 1]
+
+
+def test_a_trees_effector_colours_are_exact_palette_entries(tmp_path, tree_run):
+    theme = load_theme("light")
+    blank = [Image.new("RGB", SIZE, theme.background)]
+    extra = [(1, 2, 3), (250, 1, 2)]
+    colours = animation.build_palette(blank, theme, extra)
+    entries = [tuple(colours[i : i + 3]) for i in range(0, len(colours), 3)]
+    assert set(extra) <= set(entries) and set(theme.colors()) <= set(entries)
+    # An exported tree's GIF keeps each effector's tip colour exact.
+    scene, snaps = tree_run(3)
+    _export(tmp_path, scene, snaps, frames=False, motion=False)
+    with Image.open(tmp_path / "run.gif") as gif:
+        gif.seek(2)
+        pixels = {tuple(p) for p in np.asarray(gif.convert("RGB")).reshape(-1, 3).tolist()}
+    assert {s.tip for s in theme.effector_styles(2)} <= pixels

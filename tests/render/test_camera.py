@@ -160,3 +160,21 @@ def test_bad_inputs_to_fit_and_transforms_raise():
         Camera.fit(_scene(bounds=(0.0, 0.0, 0.0, 10.0)), (0.0, 0.0))
     with pytest.raises(ValueError, match=r"shape \(k, 2\)"):
         Camera((10, 10)).world_to_pixel([1.0, 2.0, 3.0])
+
+
+def test_fit_holds_every_effectors_targets_and_the_tree(tree_run):
+    scene, snaps = tree_run(3)
+    camera = Camera.fit(scene, snaps, (320, 180))
+    far = (np.array([[-500.0, 0.0], [0.0, 0.0]]), np.array([[0.0, 0.0], [0.0, 400.0]]))
+    wide = Camera.fit(dataclasses.replace(scene, effector_targets=far), snaps, (320, 180))
+    moved = [
+        dataclasses.replace(s, targets=np.array([[0.0, -300.0], [np.nan, np.nan]])) for s in snaps
+    ]
+    low = Camera.fit(scene, moved, (320, 180))
+    for cam, points in [
+        (camera, np.concatenate([*scene.effector_targets, *(s.joints for s in snaps)])),
+        (wide, np.concatenate(far)),
+        (low, [[0.0, -300.0]]),
+    ]:
+        pixels = cam.world_to_pixel(points)
+        assert np.all(pixels >= 0) and np.all(pixels <= [320, 180])

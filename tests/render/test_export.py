@@ -183,10 +183,10 @@ def test_parallel_export_is_byte_identical_to_serial(tmp_path, run):
 
 def test_trail_covers_the_last_seconds(run):
     scene, snaps = run(100)
-    trail = export.trail_at(snaps, 80, scene.fps)
-    assert len(trail) == math.ceil(export.TRAIL_SECONDS * scene.fps) + 1
-    np.testing.assert_array_equal(trail[-1], snaps[80].joints[-1])
-    assert len(export.trail_at(snaps, 0, scene.fps)) == 1
+    trail = export.trail_at(scene, snaps, 80)
+    assert trail.shape == (math.ceil(export.TRAIL_SECONDS * scene.fps) + 1, 1, 2)
+    np.testing.assert_array_equal(trail[-1, 0], snaps[80].joints[-1])
+    assert len(export.trail_at(scene, snaps, 0)) == 1
 
 
 def test_code_from_stdin_exports_serially_or_says_why(tmp_path, run, monkeypatch):

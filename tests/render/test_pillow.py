@@ -235,3 +235,149 @@ def test_a_dashed_path_to_a_far_target_draws_only_the_dashes_inside_the_frame():
     outside = Lines()
     _dashed(outside, np.array([-1e9, -5e8]), np.array([1e9, -5e8]), (0, 0, 0), frame, 1, 5.0)
     assert outside.drawn == []
+
+
+# -- trees -----------------------------------------------------------------------------------------
+
+TREE_CAMERA = Camera((240, 180), center=(0.0, 50.0), scale=1.0)
+
+
+def _near(image: Image.Image, camera: Camera, world, color, radius: int = 2) -> bool:
+    """Whether a pixel within ``radius`` of ``world`` is within 40 of ``color`` on every
+    channel (a small marker's centre is anti-aliased into its neighbours)."""
+    x, y = (int(v) for v in camera.world_to_pixel([world])[0])
+    block = np.asarray(image, dtype=int)[y - radius : y + radius + 1, x - radius : x + radius + 1]
+    return bool(np.any(np.abs(block - np.array(color)).max(axis=2) < 40))
+
+
+def test_a_tree_draws_every_link_and_each_effector_in_its_own_colour(tree_run):
+    scene, snaps = tree_run(4)
+    snap = snaps[-1]
+    styles = LIGHT.effector_styles(2)
+    trail = np.array([[[-60.0, 100.0], [60.0, 100.0]], [[-40.0, 110.0], [40.0, 110.0]]])
+    image = render_snapshot(scene, snap, TREE_CAMERA, LIGHT, trail=trail, hud=False)
+    starts, ends = snap.joints[:5], snap.joints[5:]
+    for i in range(5):  # the middle of every link, the trunk and both arms
+        middle = starts[i] + 0.45 * (ends[i] - starts[i])
+        assert _pixel(image, TREE_CAMERA, middle) == LIGHT.link, i
+    for j, link in enumerate(scene.effector_links):
+        assert _pixel(image, TREE_CAMERA, ends[link]) == styles[j].tip
+        assert _near(image, TREE_CAMERA, snap.targets[j], styles[j].target)  # crosshair dot
+        assert _near(image, TREE_CAMERA, trail[-1, j] - (2.0, 0.0), styles[j].trail, 1)
+    assert styles[0].target != styles[1].target
+    # Not the chain's one target colour: each effector has its own.
+    assert not _near(image, TREE_CAMERA, snap.targets[0], LIGHT.target, 4)
+
+
+def test_a_tree_joint_sits_where_the_arms_branch(tree_run):
+    scene, snaps = tree_run(2)
+    image = render_snapshot(scene, snaps[0], TREE_CAMERA, LIGHT, hud=False)
+    branch = snaps[0].joints[5 + 0]  # the trunk's end, where both arms start
+    assert _pixel(image, TREE_CAMERA, branch) == LIGHT.joint
+    assert _pixel(image, TREE_CAMERA, snaps[0].joints[0]) == LIGHT.base  # the root's bolt
+
+
+def test_an_effector_without_a_target_has_no_marker_but_its_upcoming_ones(tree_run):
+    scene, snaps = tree_run(3)
+    first = snaps[0]  # the right arm has no target yet
+    assert np.isnan(first.targets[1]).all()
+    assert pillow._upcoming(scene, first, 0).tolist() == [[-80.0, 20.0]]
+    np.testing.assert_array_equal(pillow._upcoming(scene, first, 1), scene.effector_targets[1])
+    assert pillow._upcoming(scene, snaps[1], 1).tolist() == [[90.0, 90.0]]
+    following = dataclasses.replace(snaps[1], targets=np.array([[5.0, 5.0], [6.0, 6.0]]))
+    assert len(pillow._upcoming(scene, following, 0)) == 0
+    image = render_snapshot(scene, first, TREE_CAMERA, LIGHT, hud=False)
+    right = LIGHT.effector_styles(2)[1]
+    assert not _near(image, TREE_CAMERA, scene.effector_targets[1][0], right.target, 4)
+    pixels = np.asarray(image).reshape(-1, 3)
+    assert np.any(np.all(pixels == right.upcoming, axis=1))  # its upcoming rings
+
+
+def test_redrawing_only_a_trees_moving_parts_matches_a_full_frame(tree_run):
+    scene, snaps = tree_run(5)
+    camera = Camera.fit(scene, snaps, SIZE)
+    from ikgame.render.export import trail_at
+
+    trail = trail_at(scene, snaps, 3)
+    fast = render_snapshot(scene, snaps[3], camera, LIGHT, trail=trail, hud=False)
+    full = pillow._static_layers(scene, camera, LIGHT, 3)[0].copy()
+    pillow._draw_dynamic(
+        pillow._Painter(ImageDraw.Draw(full), camera.scaled(3), LIGHT, 3), scene, snaps[3], trail
+    )
+    full = full.reduce(3)
+    diff = np.abs(np.asarray(fast, dtype=int) - np.asarray(full, dtype=int)).max(axis=2)
+    assert np.count_nonzero(diff) < 0.005 * diff.size
+    assert diff.mean() < 0.2
+
+
+def test_the_hud_lists_each_effectors_error_in_its_colour(tree_run):
+    scene, snaps = tree_run(2)
+    lines = pillow._hud_lines(scene, snaps[0], LIGHT)
+    styles = LIGHT.effector_styles(2)
+    (effectors,) = [line for line in lines if line[0][0] == "left"]
+    text = "".join(run for run, _ in effectors)
+    assert text == f"left {snaps[0].errors[0]:.1f}   right - px"
+    assert (("left", styles[0].target) in effectors) and (("right", styles[1].target) in effectors)
+    many = dataclasses.replace(
+        scene,
+        effector_names=tuple("abcdef"),
+        parents=np.array([-1] * 6),
+        effector_links=np.arange(6),
+        link_widths=np.ones(6),
+        effector_targets=(),
+    )
+    snap = dataclasses.replace(snaps[0], errors=np.arange(6.0))
+    assert len(pillow._effector_lines(many, snap, LIGHT)) == 2  # four to a line
+    # A chain's HUD is as it was: no effector line.
+    assert pillow._effector_lines(_bare_scene(), _one_link(), LIGHT) == []
+    image = render_snapshot(scene, snaps[0], TREE_CAMERA, LIGHT)
+    assert image.size == TREE_CAMERA.size
+
+
+def test_a_tree_snapshot_that_does_not_fit_its_scene_raises(tree_run):
+    scene, snaps = tree_run(1)
+    with pytest.raises(ValueError, match=r"a tree of 5 links needs \(10, 2\)"):
+        render_snapshot(
+            scene, dataclasses.replace(snaps[0], joints=np.zeros((6, 2))), TREE_CAMERA, LIGHT
+        )
+    with pytest.raises(ValueError, match="3 target rows for 2 effectors"):
+        render_snapshot(
+            scene, dataclasses.replace(snaps[0], targets=np.zeros((3, 2))), TREE_CAMERA, LIGHT
+        )
+    with pytest.raises(ValueError, match="trail has shape"):
+        render_snapshot(scene, snaps[0], TREE_CAMERA, LIGHT, trail=np.zeros((4, 3, 2)))
+
+
+def test_a_tree_links_sprite_lies_along_that_link(tree_run):
+    from ikgame.snapshot import Sprite
+
+    red = np.zeros((8, 40, 4), dtype=np.uint8)
+    red[...] = (255, 0, 0, 255)
+    sprites = (None, None, None, Sprite(red, (0.0, 4.0), 1.0), None)  # the right upper arm
+    scene, snaps = tree_run(2, link_sprites=sprites)
+    snap = snaps[-1]
+    image = render_snapshot(scene, snap, TREE_CAMERA, LIGHT, hud=False)
+    starts, ends = snap.joints[:5], snap.joints[5:]
+    assert _pixel(image, TREE_CAMERA, (starts[3] + ends[3]) / 2) == (255, 0, 0)
+    assert _pixel(image, TREE_CAMERA, (starts[1] + ends[1]) / 2) == LIGHT.link
+
+
+def test_roots_spread_over_a_body_stand_on_no_pedestal():
+    def image(starts):
+        scene = _bare_scene(
+            link_widths=np.full(2, 12.0),
+            parents=np.array([-1, -1]),
+            effector_links=np.array([0, 1]),
+            effector_names=("a", "b"),
+        )
+        joints = np.vstack([starts, starts + [0.0, 40.0]])
+        snap = Snapshot(0.0, 0, joints, np.zeros(2), np.zeros(2), targets=np.full((2, 2), np.nan))
+        return render_snapshot(scene, snap, Camera((200, 100), scale=1.0), LIGHT, hud=False)
+
+    camera = Camera((200, 100), scale=1.0)
+    shared = image(np.array([[0.0, 0.0], [0.0, 0.0]]))
+    assert _pixel(shared, camera, (0.0, -12.0)) == LIGHT.base  # the pedestal under the base
+    spread = image(np.array([[-40.0, 0.0], [40.0, 0.0]]))
+    for x in (-40.0, 40.0):
+        assert _pixel(spread, camera, (x, -12.0)) == LIGHT.background
+        assert _pixel(spread, camera, (x, 0.0)) == LIGHT.base  # each root's bolt

@@ -7,7 +7,9 @@ from dataclasses import fields
 
 import pytest
 
-from ikgame.render.theme import Theme, available_themes, load_theme
+from ikgame.render.theme import EFFECTOR_PALETTE, Theme, available_themes, load_theme
+
+COLOURS = [f.name for f in fields(Theme) if f.name != "effector_palette"]
 
 
 def test_shipped_themes_load_and_differ():
@@ -30,11 +32,39 @@ def _write(tmp_path, data) -> str:
 
 
 def test_theme_file_by_path_accepts_hex_and_lists(tmp_path):
-    data = {f.name: "#102030" for f in fields(Theme)}
+    data = {name: "#102030" for name in COLOURS}
     data["link"] = [1, 2, 3]
     theme = load_theme(_write(tmp_path, data))
     assert theme.background == (16, 32, 48)
     assert theme.link == (1, 2, 3)
+    assert theme.effector_palette == EFFECTOR_PALETTE  # optional in a theme file
+    data["effector_palette"] = ["#ff0000", [0, 0, 255]]
+    assert load_theme(_write(tmp_path, data)).effector_palette == ((255, 0, 0), (0, 0, 255))
+
+
+@pytest.mark.parametrize("palette", [[], "#ff0000", ["#ff0000", "red"], [[0, 0, 999]]])
+def test_a_bad_effector_palette_names_the_field(tmp_path, palette):
+    data = {name: "#000000" for name in COLOURS} | {"effector_palette": palette}
+    with pytest.raises(ValueError, match="effector_palette: expected"):
+        load_theme(_write(tmp_path, data))
+
+
+def test_one_effector_keeps_the_theme_colours_and_several_take_the_palette():
+    for theme in (load_theme("light"), load_theme("dark")):
+        (lone,) = theme.effector_styles(1)
+        assert (lone.target, lone.trail, lone.tip, lone.upcoming) == (
+            theme.target,
+            theme.trail,
+            theme.effector,
+            theme.target_upcoming,
+        )
+        palette = theme.effector_palette
+        styles = theme.effector_styles(len(palette) + 1)
+        assert [s.target for s in styles] == [*palette, palette[0]]  # round again past the end
+        assert all(s.trail == s.tip == s.target for s in styles)
+        # Distinct colours, none of them the links' (the effector colours mark the tips).
+        assert len(set(palette)) == len(palette) and theme.link not in palette
+        assert all(s.upcoming not in (s.target, theme.background) for s in styles)
 
 
 @pytest.mark.parametrize(
@@ -47,13 +77,13 @@ def test_theme_file_by_path_accepts_hex_and_lists(tmp_path):
     ],
 )
 def test_bad_theme_files_raise(tmp_path, change, message):
-    data = {f.name: "#000000" for f in fields(Theme)} | change
+    data = {name: "#000000" for name in COLOURS} | change
     with pytest.raises(ValueError, match=message):
         load_theme(_write(tmp_path, data))
 
 
 def test_missing_colours_and_files_raise(tmp_path):
-    data = {f.name: "#000000" for f in fields(Theme)}
+    data = {name: "#000000" for name in COLOURS}
     del data["grid"]
     with pytest.raises(ValueError, match=r"missing colours \['grid'\]"):
         load_theme(_write(tmp_path, data))
