@@ -9,6 +9,7 @@ changes nothing but the time.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import numpy as np
 
@@ -211,43 +212,66 @@ class FloatPose:
 
 
 def fit_floats(
-    bias: Loads, push: Loads, wanted: list[float], limits: list[float]
+    bias: Loads,
+    push: Loads,
+    wanted: list[float],
+    limits: list[float],
+    head: Callable[[int], Loads] | None = None,
 ) -> tuple[list[float], Loads, list[bool], bool]:
     """:func:`~ikgame.control.dynamics.fit_drive` over lists: the accelerations, the loads,
     which joints are saturated, and whether the loads are those of the motion."""
-    bt, bx, by = bias
-    st, sx, sy = push
-    full_t = [b + s for b, s in zip(bt, st, strict=True)]
-    if all(abs(t) <= lim for t, lim in zip(full_t, limits, strict=True)):
-        full = (
-            full_t,
-            [b + s for b, s in zip(bx, sx, strict=True)],
-            [b + s for b, s in zip(by, sy, strict=True)],
-        )
+    full = _affine(bias, push, 1.0)
+    if all(abs(t) <= lim for t, lim in zip(full[0], limits, strict=True)):
         return wanted, full, [False] * len(limits), True
-    low, high, holds = -math.inf, math.inf, True
-    for b, s, lim in zip(bt, st, limits, strict=True):
+    scale, binding = _largest_factor(bias[0], push[0], limits)
+    if head is not None and scale is not None and binding < len(limits) - 1:
+        near = head(binding)
+        start = _affine(bias, near, 1.0)
+        rest = _affine(push, near, -1.0)
+        tail, _ = _largest_factor(start[0], rest[0], limits)
+        if tail is not None:
+            accelerations = [w if j <= binding else w * tail for j, w in enumerate(wanted)]
+            loads = _affine(start, rest, tail)
+            return accelerations, loads, _saturated(loads[0], limits), True
+    if scale is not None:
+        loads = _affine(bias, push, scale)
+        return [scale * w for w in wanted], loads, _saturated(loads[0], limits), True
+    bt, bx, by = bias
+    loads = ([min(max(b, -lim), lim) for b, lim in zip(bt, limits, strict=True)], bx, by)
+    return wanted, loads, _saturated(loads[0], limits), False
+
+
+def _affine(a: Loads, b: Loads, factor: float) -> Loads:
+    """``a + factor b``, list by list (with the factor 1 or -1, exactly a sum or a difference)."""
+    return (
+        [x + factor * y for x, y in zip(a[0], b[0], strict=True)],
+        [x + factor * y for x, y in zip(a[1], b[1], strict=True)],
+        [x + factor * y for x, y in zip(a[2], b[2], strict=True)],
+    )
+
+
+def _saturated(torques: list[float], limits: list[float]) -> list[bool]:
+    return [abs(t) >= lim * (1.0 - 1e-9) for t, lim in zip(torques, limits, strict=True)]
+
+
+def _largest_factor(
+    bias: list[float], push: list[float], limits: list[float]
+) -> tuple[float | None, int]:
+    """The dynamics module's ``_largest_factor`` over lists of torques."""
+    low, high, holds, binding = -math.inf, math.inf, True, 0
+    for j, (b, s, lim) in enumerate(zip(bias, push, limits, strict=True)):
         if s != 0.0:
             to_upper, to_lower = (lim - b) / s, (-lim - b) / s
             low = max(low, min(to_upper, to_lower))
-            high = min(high, max(to_upper, to_lower))
+            most = max(to_upper, to_lower)
+            if most < high:
+                high, binding = most, j
         elif not abs(b) <= lim:
             holds = False
     # The largest factor up to 1 that every joint allows, as in fit_drive.
     if holds and low <= high and low <= 1.0 and high >= 0.0:
-        scale = min(1.0, high)
-        accelerations = [scale * w for w in wanted]
-        loads = (
-            [b + scale * s for b, s in zip(bt, st, strict=True)],
-            [b + scale * s for b, s in zip(bx, sx, strict=True)],
-            [b + scale * s for b, s in zip(by, sy, strict=True)],
-        )
-        consistent = True
-    else:
-        accelerations, consistent = wanted, False
-        loads = ([min(max(b, -lim), lim) for b, lim in zip(bt, limits, strict=True)], bx, by)
-    saturated = [abs(t) >= lim * (1.0 - 1e-9) for t, lim in zip(loads[0], limits, strict=True)]
-    return accelerations, loads, saturated, consistent
+        return min(1.0, high), binding
+    return None, binding
 
 
 def damped_rates(

@@ -15,6 +15,7 @@ so where on it a root's joint sits changes none of the loads. A serial chain
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from functools import cached_property
 
@@ -190,6 +191,9 @@ class JointLoads:
     def __add__(self, other: JointLoads) -> JointLoads:
         return JointLoads(self.torques + other.torques, self.forces + other.forces)
 
+    def __sub__(self, other: JointLoads) -> JointLoads:
+        return JointLoads(self.torques - other.torques, self.forces - other.forces)
+
     def scaled(self, factor: float) -> JointLoads:
         """These loads times ``factor``."""
         return JointLoads(factor * self.torques, factor * self.forces)
@@ -343,30 +347,63 @@ def plan_drive(
 
 
 def fit_drive(
-    bias: JointLoads, push: JointLoads, wanted: np.ndarray, max_torque: np.ndarray
+    bias: JointLoads,
+    push: JointLoads,
+    wanted: np.ndarray,
+    max_torque: np.ndarray,
+    head: Callable[[int], JointLoads] | None = None,
 ) -> Drive:
     """:func:`plan_drive` from its parts: ``bias``, the loads of coasting (gravity and the
-    swing), and ``push``, those of the ``wanted`` accelerations alone."""
+    swing), and ``push``, those of the ``wanted`` accelerations alone.
+
+    With ``head``, a function giving the loads of the wanted accelerations of joints ``0..k``
+    alone, the joints up to the one that runs out of torque keep their wanted accelerations and
+    only those beyond it are scaled (see :func:`plan_drive`); without it, every joint's.
+    """
     limit = np.asarray(max_torque, dtype=float)
     full = bias + push
     if np.all(np.abs(full.torques) <= limit):
         return Drive(wanted, full, np.zeros(len(limit), dtype=bool))
-    consistent = True
+    scale, binding = _largest_factor(bias, push, limit)
+    if head is not None and scale is not None and binding < len(limit) - 1:
+        near = head(binding)
+        start = bias + near
+        rest = push - near
+        tail, _ = _largest_factor(start, rest, limit)
+        if tail is not None:
+            accelerations = wanted.copy()
+            accelerations[binding + 1 :] *= tail
+            return _drive(accelerations, start + rest.scaled(tail), limit)
+    if scale is not None:
+        return _drive(scale * wanted, bias + push.scaled(scale), limit)
+    return _drive(
+        wanted, JointLoads(np.clip(bias.torques, -limit, limit), bias.forces), limit, False
+    )
+
+
+def _drive(
+    accelerations: np.ndarray, loads: JointLoads, limit: np.ndarray, consistent: bool = True
+) -> Drive:
+    saturated = np.abs(loads.torques) >= limit * (1.0 - 1e-9)
+    return Drive(accelerations, loads, saturated, consistent)
+
+
+def _largest_factor(
+    bias: JointLoads, push: JointLoads, limit: np.ndarray
+) -> tuple[float | None, int]:
+    """The largest factor up to 1 on ``push`` that keeps ``bias`` plus it within every joint's
+    limit, and the first joint that allows no more; None for the factor if none does."""
     slope = push.torques
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         to_upper = (limit - bias.torques) / slope
         to_lower = (-limit - bias.torques) / slope
     moving = slope != 0.0
     low = np.max(np.where(moving, np.minimum(to_upper, to_lower), -np.inf))
-    high = np.min(np.where(moving, np.maximum(to_upper, to_lower), np.inf))
+    highs = np.where(moving, np.maximum(to_upper, to_lower), np.inf)
+    binding = int(np.argmin(highs))
+    high = float(highs[binding])
     holds = np.all(moving | (np.abs(bias.torques) <= limit))
     # Every joint allows the factors in [low, high]; the largest one up to 1 that all allow wins.
     if holds and low <= high and low <= 1.0 and high >= 0.0:
-        scale = min(1.0, high)
-        accelerations = scale * wanted
-        loads = bias + push.scaled(scale)
-    else:
-        accelerations, consistent = wanted, False
-        loads = JointLoads(np.clip(bias.torques, -limit, limit), bias.forces)
-    saturated = np.abs(loads.torques) >= limit * (1.0 - 1e-9)
-    return Drive(accelerations, loads, saturated, consistent)
+        return min(1.0, high), binding
+    return None, binding

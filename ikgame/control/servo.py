@@ -28,8 +28,8 @@ from typing import Final
 
 import numpy as np
 
-from ikgame.control._floats import FloatInertia, fit_floats
-from ikgame.control.dynamics import ChainInertia, Pose, fit_drive
+from ikgame.control._floats import FloatInertia, Loads, fit_floats
+from ikgame.control.dynamics import ChainInertia, JointLoads, Pose, fit_drive
 
 __all__ = ["Servo", "ServoCommand"]
 
@@ -47,6 +47,13 @@ it less at the pose it is in now."""
 FLOAT_LINKS: Final = 30
 """Chains (and trees) up to this many links are driven over Python floats, longer ones over
 numpy arrays: the same numbers either way, whichever is faster."""
+
+SECTION_LINKS: Final = 30
+"""Chains (and trees) longer than this, when a joint runs out of torque, keep the wanted
+accelerations of the joints up to it and scale only those beyond it; shorter ones scale every
+joint's by one factor, which keeps the motion's direction (see :func:`fit_drive`). One factor
+set by the base of 200 links leaves every joint a few percent of its wanted acceleration, tick
+after tick, and the chain swings under gravity as if unpowered."""
 
 BRAKE_SHARE: Final = 0.5
 """Share of a joint's spare torque the velocity profile plans to brake with: the rest is margin
@@ -99,6 +106,7 @@ class Servo:
         self._velocities = np.zeros(count)
         self._carried = np.zeros(count)
         self._floats = FloatInertia(inertia) if inertia.count <= FLOAT_LINKS else None
+        self._sections = inertia.count > SECTION_LINKS
         self._limits = self.max_torque.tolist()
         self._speeds = self.max_speed.tolist()
 
@@ -192,17 +200,24 @@ class Servo:
         wanted = np.clip(target, velocities - down * dt, velocities + up * dt)
         wanted_acceleration = (wanted - velocities) / dt
         push = pose.loads(alpha=along(wanted_acceleration))
+        joints = np.arange(len(error))
+
+        def near(k: int) -> JointLoads:
+            return pose.loads(alpha=along(np.where(joints <= k, wanted_acceleration, 0.0)))
+
+        head = near if self._sections else None
         drive = fit_drive(
             hold + pose.loads(omega=along(velocities)),
             push,
             wanted_acceleration,
             self.max_torque,
+            head,
         )
         if not drive.consistent:
             # Moving faster than the motors can hold (after a knock, say): feeding forward the
             # swing's own loads, clipped, would fight the pivots and fling a long chain apart.
             # Gravity and the wanted acceleration alone, and pymunk's pivots find the rest.
-            drive = fit_drive(hold, push, wanted_acceleration, self.max_torque)
+            drive = fit_drive(hold, push, wanted_acceleration, self.max_torque, head)
         self._saturated = drive.saturated
         return ServoCommand(
             rates=velocities + drive.accelerations * dt,
@@ -287,10 +302,17 @@ class Servo:
             [a + b for a, b in zip(hold[1], swing[1], strict=True)],
             [a + b for a, b in zip(hold[2], swing[2], strict=True)],
         )
-        reached, loads, saturated, consistent = fit_floats(bias, push, accelerations, limits)
+
+        def near(k: int) -> Loads:
+            return pose.loads(
+                alpha=tree.along([a if j <= k else 0.0 for j, a in enumerate(accelerations)])
+            )
+
+        head = near if self._sections else None
+        reached, loads, saturated, consistent = fit_floats(bias, push, accelerations, limits, head)
         if not consistent:
             # See command: gravity and the wanted acceleration alone, pymunk's pivots the rest.
-            reached, loads, saturated, _ = fit_floats(hold, push, accelerations, limits)
+            reached, loads, saturated, _ = fit_floats(hold, push, accelerations, limits, head)
         self._saturated = np.array(saturated)
         torques = loads[0]
         return ServoCommand(

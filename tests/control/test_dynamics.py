@@ -5,8 +5,14 @@ import math
 import numpy as np
 import pytest
 
-from ikgame.control._floats import FloatInertia
-from ikgame.control.dynamics import ChainInertia, Pose, inverse_dynamics, plan_drive
+from ikgame.control._floats import FloatInertia, fit_floats
+from ikgame.control.dynamics import (
+    ChainInertia,
+    Pose,
+    fit_drive,
+    inverse_dynamics,
+    plan_drive,
+)
 
 GRAVITY = 900.0
 
@@ -102,6 +108,77 @@ def test_a_joint_that_cannot_hold_its_load_pushes_at_its_limit_and_the_rest_coas
     np.testing.assert_allclose(drive.loads.forces, hold.forces)
     # The motors still strive for the wanted motion with the torque they have left.
     np.testing.assert_allclose(drive.accelerations, wanted)
+
+
+def _head(pose, chain, wanted):
+    """The loads of the wanted accelerations of joints 0..k alone, as the servo gives them."""
+    joints = np.arange(chain.count)
+    return lambda k: pose.loads(alpha=chain.along(np.where(joints <= k, wanted, 0.0)))
+
+
+def test_the_joints_up_to_the_one_that_runs_out_keep_their_acceleration():
+    chain = _chain(8)
+    angles = np.cumsum(np.full(8, 0.3))
+    wanted = np.full(8, 50.0)
+    pose = Pose(chain, angles)
+    bias = pose.loads(gravity=(0, -900))
+    push = pose.loads(alpha=chain.along(wanted))
+    head = _head(pose, chain, wanted)
+    # The base can give its own acceleration, but not the others' on top of it.
+    limit = np.full(8, 1e9)
+    limit[0] = 0.5 * (
+        abs(bias.torques[0] + head(0).torques[0]) + abs(bias.torques[0] + push.torques[0])
+    )
+    drive = fit_drive(bias, push, wanted, limit, head)
+    assert drive.consistent and drive.saturated.tolist() == [True] + [False] * 7
+    assert drive.accelerations[0] == wanted[0]
+    ratio = drive.accelerations[1:] / wanted[1:]
+    np.testing.assert_allclose(ratio, ratio[0])
+    assert 0.0 < ratio[0] < 1.0
+    check = inverse_dynamics(chain, angles, np.zeros(8), np.cumsum(drive.accelerations), (0, -900))
+    np.testing.assert_allclose(check.torques, drive.loads.torques, rtol=1e-9, atol=1e-6)
+    np.testing.assert_allclose(check.forces, drive.loads.forces, rtol=1e-9, atol=1e-6)
+    # Without the split every joint, the base's too, gets one factor.
+    together = fit_drive(bias, push, wanted, limit)
+    assert together.accelerations[0] < wanted[0]
+    np.testing.assert_allclose(together.accelerations / wanted, together.accelerations[0] / 50.0)
+
+
+def test_the_float_fit_gives_the_same_floats_as_numpy():
+    rng = np.random.default_rng(5)
+    chain = _chain(7, seed=5)
+    floats = FloatInertia(chain)
+    split = 0
+    for _ in range(100):
+        angles = np.cumsum(rng.normal(size=7))
+        pose, fast = Pose(chain, angles), floats.pose(angles)
+        wanted, omega = rng.normal(size=7) * 200.0, rng.normal(size=7)
+        limit = rng.uniform(1e3, 4e5, 7)
+        bias = pose.loads(omega=chain.along(omega), gravity=(0.0, -900.0))
+        push = pose.loads(alpha=chain.along(wanted))
+        drive = fit_drive(bias, push, wanted, limit, _head(pose, chain, wanted))
+        together = fit_drive(bias, push, wanted, limit)
+        split += not np.array_equal(drive.accelerations, together.accelerations)
+        listed = wanted.tolist()
+
+        def head(k, listed=listed, fast=fast):
+            return fast.loads(
+                alpha=floats.along([a if j <= k else 0.0 for j, a in enumerate(listed)])
+            )
+
+        reached, loads, saturated, consistent = fit_floats(
+            fast.loads(omega=floats.along(omega.tolist()), gravity=(0.0, -900.0)),
+            fast.loads(alpha=floats.along(listed)),
+            listed,
+            limit.tolist(),
+            head,
+        )
+        assert list(reached) == drive.accelerations.tolist()
+        assert loads[0] == drive.loads.torques.tolist()
+        assert loads[1] == drive.loads.forces[:, 0].tolist()
+        assert loads[2] == drive.loads.forces[:, 1].tolist()
+        assert saturated == drive.saturated.tolist() and consistent == drive.consistent
+    assert split  # the split was taken, not only the one factor
 
 
 def test_chain_inertia_checks_its_shapes():
