@@ -113,7 +113,7 @@ def test_gravity_torque_is_the_slope_of_the_potential_energy():
 
     h = 1e-6
     slope = [(energy(pose + h * e) - energy(pose - h * e)) / (2 * h) for e in np.eye(4)]
-    torques = metrics.gravity_torques(spec, metrics.chain_points(spec, pose))
+    torques = metrics.gravity_torques(spec, *metrics.link_segments(spec, pose))
     np.testing.assert_allclose(torques, np.abs(slope), rtol=1e-5, atol=1e-3)
 
 
@@ -121,13 +121,13 @@ def test_clearance_sees_a_link_crossing_an_obstacle():
     spec = dataclasses.replace(
         _spec(1), base=np.zeros(2), base_angle=0.0, lengths=np.array([100.0])
     )
-    points = metrics.chain_points(spec, np.zeros(1))
+    links = metrics.link_segments(spec, np.zeros(1))
     wall = dataclasses.replace(spec, segments=np.array([[50.0, -40.0, 50.0, 40.0, 2.0]]))
-    assert metrics.obstacle_clearance(wall, points) < 0.0
+    assert metrics.obstacle_clearance(wall, *links) < 0.0
     beside = dataclasses.replace(spec, segments=np.array([[0.0, 20.0, 100.0, 20.0, 2.0]]))
-    assert abs(metrics.obstacle_clearance(beside, points) - 13.0) < 1e-9
+    assert abs(metrics.obstacle_clearance(beside, *links) - 13.0) < 1e-9
     disc = dataclasses.replace(spec, circles=np.array([[120.0, 0.0, 10.0]]))
-    assert abs(metrics.obstacle_clearance(disc, points) - 5.0) < 1e-9
+    assert abs(metrics.obstacle_clearance(disc, *links) - 5.0) < 1e-9
 
 
 def test_a_witness_respects_limits_torque_and_obstacles():
