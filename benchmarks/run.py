@@ -7,7 +7,7 @@ target. Timings are medians of repeats. Sections:
 
 - tick: a full ``Simulation.step()`` against a bare ``pymunk.Space.step`` of the same bodies,
   joints and motors (``space.iterations = 20``, 1/240 s, no Python between steps), at 3 to 1000
-  links, with a reach and a circle target, and the growth exponent of each;
+  links, with a reach and a circle target, and the growth exponent of each, in CPU time;
 - levels: headless speed as a multiple of real time per shipped level, in-process and as a whole
   ``python -m ikgame run LEVEL --no-frames`` process; start-up of ``ikgame --version``;
 - solvers: time per IK solve against ikpy on the same planar chains and tolerance;
@@ -121,15 +121,18 @@ def chain_level(links: int, target: str) -> Level:
 
 
 def _per_tick(step: Callable[[], object], ticks: int) -> float:
-    start = time.perf_counter()
+    # CPU time of this process: the other jobs of a busy machine do not count against either
+    # side (its caches being shared still does).
+    start = time.process_time()
     for _ in range(ticks):
         step()
-    return (time.perf_counter() - start) / ticks
+    return (time.process_time() - start) / ticks
 
 
 def bench_tick(sizes: list[int], repeats: int) -> None:
     _header("tick: full Simulation.step() against a bare pymunk Space.step of the same space")
     print(f"   bare step: space.iterations = {BARE_ITERATIONS}, dt = 1/240 s, nothing in between")
+    print("   CPU time per tick of this process, median of interleaved repeats")
     print(f"   {'links':>6} {'target':<7}{'full':>11}{'bare':>11}{'ratio':>8}   ")
     fits: dict[str, list[tuple[int, float, float]]] = {"reach": [], "circle": []}
     for links in sizes:
@@ -175,16 +178,17 @@ def _wall(command: list[str]) -> float:
 
 def bench_levels(repeats: int, whole_process: bool) -> None:
     _header("levels: headless speed as a multiple of real time (higher is better)")
+    print("   in-process: CPU time of this process; process: wall time of a whole run")
     print(f"   {'level':<22}{'links':>6}{'sim s':>7}{'in-process':>12}{'process':>10}")
     with tempfile.TemporaryDirectory() as tmp:
         for path in shipped_levels():
             level = load_level(path)
             walls, sim = [], None
             for _ in range(repeats):
-                start = time.perf_counter()
+                start = time.process_time()  # CPU time, as for the tick
                 sim = Simulation(level, record=False)
                 sim.run()
-                walls.append(time.perf_counter() - start)
+                walls.append(time.process_time() - start)
             assert sim is not None
             inproc = sim.time / statistics.median(walls)
             process = ""

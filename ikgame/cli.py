@@ -693,6 +693,13 @@ def _print_summary(console: Console, result: RunResult, out: Path, written: list
             f"{escape(goal.prop)} ended at ({x:.0f}, {y:.0f})",
         )
     console.print(table)
+    if result.footing:
+        worst = {k: max(leg[k] for leg in result.footing.values()) for k in ("slip", "sink")}
+        steps = sum(leg["steps"] for leg in result.footing.values())
+        console.print(
+            f"footing: {steps} steps by {len(result.footing)} feet; planted feet slid at most "
+            f"{worst['slip']:.1f} px and sank at most {worst['sink']:.1f} px"
+        )
     frames = sum(1 for p in written if p.parent.name == "frames")
     others = [p.name for p in written if p.parent.name != "frames"]
     listed = ([f"frames/ ({frames} PNG)"] if frames else []) + others

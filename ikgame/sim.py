@@ -341,10 +341,11 @@ class Simulation:
             )
         target = self._goal()
         self._release_if_moved(target)
+        angles, velocities = self.world.joint_state()
         command = self.controller.command(
-            self.world.joint_angles(),
+            angles,
             target,
-            velocities=self.world.joint_velocities(),
+            velocities=velocities,
             gravity=self.world.gravity,
             dt=self.dt,
             base_motion=self.world.base_motion(),

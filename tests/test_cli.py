@@ -472,3 +472,16 @@ def test_a_skinned_level_gives_the_same_frames_serial_and_in_workers(tmp_path):
     b = sorted((tmp_path / "b/frames").iterdir())
     assert len(a) == len(b) > 100
     assert all(x.read_bytes() == y.read_bytes() for x, y in zip(a, b, strict=True))
+
+
+def test_a_creature_run_reports_its_footing(tmp_path, capsys):
+    level = ROOT / "levels" / "16_walker.toml"
+    text = level.read_text().replace("duration = 18.0", "duration = 3.0")
+    short = tmp_path / "walker.toml"
+    short.write_text(text.replace("over = 14.0", "over = 2.0"))
+    out = tmp_path / "run"
+    assert main(["run", str(short), "--no-frames", "--out", str(out)]) in (0, 1)
+    footing = json.loads((out / "results.json").read_text())["footing"]
+    assert set(footing) == {"foot_1", "foot_2", "foot_3", "foot_4"}
+    assert all(leg["steps"] >= 1 for leg in footing.values())
+    assert "footing:" in capsys.readouterr().out

@@ -38,6 +38,11 @@ def test_game_loop_example_runs():
     exec(compile(_block("## Use it from your game loop", "python"), "README.md", "exec"), {})
 
 
+def test_tree_example_runs():
+    code = _block("A tree of bones has one target per effector", "python")
+    exec(compile("import ikgame\n" + code, "README.md", "exec"), {})
+
+
 def test_level_example_is_a_valid_level_that_runs():
     level = parse_level(_block("A level in brief", "toml"), "README.md")
     assert Simulation(level, record=False).run().status in ("passed", "failed")

@@ -145,6 +145,7 @@ class PlayState:
         self.quit = False
         self.gravity_on = True
         self.held: np.ndarray | None = None  # the world point the mouse holds, px
+        self._grabbed = "tip"  # the effector the mouse holds
         self.message = ""
         # Counts changes to what the window shows: an unchanged picture is not drawn again.
         self.revision = 0
@@ -200,8 +201,10 @@ class PlayState:
         self._extra_ticks = 0
         self._extra: tuple[str, float, np.ndarray] | None = None
         self.result: RunResult | None = None  # once the run is over
-        if self.held is not None:
-            self.sim.target = self.held
+        if self.held is not None and self._grabbed in self.sim.effector_names:
+            self.sim.set_target(self._grabbed, self.held)
+        else:
+            self.held = None
 
     def reload(self) -> bool:
         """Read the level file again and restart it; on a broken file keep the running level,
@@ -227,14 +230,18 @@ class PlayState:
         self.revision += 1
         if isinstance(event, MouseDown):
             self.held = self.pixel_to_world(event.pixel)
-            self.sim.target = self.held
+            # The mouse takes the effector nearest to where it pressed (a chain's only one).
+            reached = self.sim.world.effector_positions()
+            nearest = int(np.argmin(np.hypot(*(reached - self.held).T)))
+            self._grabbed = self.sim.effector_names[nearest]
+            self.sim.set_target(self._grabbed, self.held)
         elif isinstance(event, MouseMove):
             if self.held is not None:
                 self.held = self.pixel_to_world(event.pixel)
-                self.sim.target = self.held
+                self.sim.set_target(self._grabbed, self.held)
         elif isinstance(event, MouseUp):
             self.held = None
-            self.sim.target = None
+            self.sim.set_target(self._grabbed, None)
         elif isinstance(event, KeyPress):
             action = _ACTIONS.get(event.name)
             if action is not None:

@@ -126,7 +126,7 @@ class FloatPose:
         n = tree.count
         lx, ly = self.lx, self.ly
         gx, gy = (0.0, 0.0) if gravity is None else gravity
-        ax, ay = [0.0] * n, [0.0] * n
+        ax, ay = [0.0] * n, [0.0] * n  # numpy's zeros, which alpha and omega add to
         if alpha is not None:
             ax = [0.0 + a * -y for a, y in zip(alpha, ly, strict=True)]
             ay = [0.0 + a * x for a, x in zip(alpha, lx, strict=True)]
@@ -134,17 +134,19 @@ class FloatPose:
             ax = [a - w * w * x for a, w, x in zip(ax, omega, lx, strict=True)]
             ay = [a - w * w * y for a, w, y in zip(ay, omega, ly, strict=True)]
         masses = tree.masses
-        own_x, own_y = [0.0] * n, [0.0] * n
-        jx = jy = -0.0
-        for i in range(n):
-            x, y = ax[i], ay[i]
-            jx += x
-            jy += y
-            # Each joint accelerates with everything before it; each centre with half its link.
-            if gravity is None:
-                own_x[i] = masses[i] * (jx - 0.5 * x)
-                own_y[i] = masses[i] * (jy - 0.5 * y)
-            else:
+        if alpha is None and omega is None:
+            # Gravity alone: every centre's acceleration is 0.0 - g, as numpy's zeros give.
+            cx, cy = 0.0 - gx, 0.0 - gy
+            own_x, own_y = [m * cx for m in masses], [m * cy for m in masses]
+        else:
+            own_x, own_y = [0.0] * n, [0.0] * n
+            jx = jy = -0.0
+            for i in range(n):
+                x, y = ax[i], ay[i]
+                jx += x
+                jy += y
+                # Each joint accelerates with everything before it; each centre with half its
+                # link.
                 own_x[i] = masses[i] * (jx - 0.5 * x - gx)
                 own_y[i] = masses[i] * (jy - 0.5 * y - gy)
         hx, hy, moments = self.hx, self.hy, tree.moments
@@ -246,3 +248,41 @@ def fit_floats(
         loads = ([min(max(b, -lim), lim) for b, lim in zip(bt, limits, strict=True)], bx, by)
     saturated = [abs(t) >= lim * (1.0 - 1e-9) for t, lim in zip(loads[0], limits, strict=True)]
     return accelerations, loads, saturated, consistent
+
+
+def damped_rates(
+    lengths: list[float],
+    base: tuple[float, float],
+    base_angle: float,
+    angles: list[float],
+    velocity: tuple[float, float],
+    damping: float,
+) -> list[float]:
+    """Joint rates (rad/s) that move a serial chain's end effector at ``velocity`` (px/s):
+    ``J^T (J J^T + damping I)^-1 v``, the damped least-norm answer, with ``damping`` in px^2.
+
+    >>> [round(r, 6) for r in damped_rates([10.0], (0.0, 0.0), 0.0, [0.0], (0.0, 10.0), 1.0)]
+    [0.990099]
+    """
+    xs, ys = [], []
+    x, y = base
+    heading = base_angle
+    for length, angle in zip(lengths, angles, strict=True):
+        xs.append(x)
+        ys.append(y)
+        heading += angle
+        x += length * math.cos(heading)
+        y += length * math.sin(heading)
+    # Column i of the Jacobian is the arm from joint i to the end, turned a quarter turn.
+    arms_x = [x - joint for joint in xs]
+    arms_y = [y - joint for joint in ys]
+    a = d = damping
+    b = 0.0
+    for ax, ay in zip(arms_x, arms_y, strict=True):
+        a += ay * ay
+        b -= ay * ax
+        d += ax * ax
+    det = a * d - b * b
+    vx, vy = velocity
+    u, w = (d * vx - b * vy) / det, (a * vy - b * vx) / det
+    return [ax * w - ay * u for ax, ay in zip(arms_x, arms_y, strict=True)]

@@ -19,7 +19,8 @@ from typing import Final
 
 import numpy as np
 
-from ikgame.control.servo import Servo, ServoCommand
+from ikgame.control._floats import damped_rates
+from ikgame.control.servo import FLOAT_LINKS, Servo, ServoCommand
 from ikgame.kinematics import (
     RobustSolver,
     Skeleton,
@@ -98,6 +99,7 @@ class Controller:
         self.iterations = int(iterations)
         self.arrival = float(arrival)
         self._limited = skeleton.limited
+        self._all_limited = bool(self._limited.all())
         self._held: np.ndarray | None = None
         self._holding = False
         self._last_target: np.ndarray | None = None
@@ -124,7 +126,7 @@ class Controller:
     def skeleton(self, skeleton: Skeleton) -> None:
         self.solver.skeleton = skeleton
         # The damping of the target's pseudo-inverse (see _goal_rates), px^2, per chain.
-        self._damping = (0.01 * skeleton.reach) ** 2 * np.eye(2)
+        self._damping = (0.01 * skeleton.reach) ** 2
 
     @property
     def solver_name(self) -> str:
@@ -171,13 +173,30 @@ class Controller:
             velocity = velocity - base_velocity - spin * np.column_stack((-arms[:, 1], arms[:, 0]))
         if not np.any(velocity):
             return None
-        if links is None:
-            arms = jacobian(self.skeleton, measured)
+        skeleton, damping = self.skeleton, self._damping
+        if links is None and skeleton.is_chain and skeleton.count <= FLOAT_LINKS:
+            # A short chain's 2x2 system in closed form: np.linalg.solve and the checked
+            # Jacobian cost more than the system itself.
+            base = (float(skeleton.base[0]), float(skeleton.base[1]))
+            vx, vy = velocity[0].tolist()
+            rates = np.array(
+                damped_rates(
+                    skeleton.lengths.tolist(),
+                    base,
+                    skeleton.base_angle,
+                    measured.tolist(),
+                    (vx, vy),
+                    damping,
+                )
+            )
         else:
-            arms = stacked_jacobian(self.skeleton, measured, links)
-        velocity = velocity.reshape(-1)
-        damping = (0.01 * self.skeleton.reach) ** 2
-        rates = arms.T @ np.linalg.solve(arms @ arms.T + damping * np.eye(len(velocity)), velocity)
+            if links is None:
+                arms = jacobian(skeleton, measured)
+            else:
+                arms = stacked_jacobian(skeleton, measured, links)
+            velocity = velocity.reshape(-1)
+            eye = np.eye(len(velocity))
+            rates = arms.T @ np.linalg.solve(arms @ arms.T + damping * eye, velocity)
         over = float(np.max(np.abs(rates) / self.max_speed))
         if over > JUMP:
             return None
@@ -225,7 +244,10 @@ class Controller:
                 self._held = self.skeleton.clamp(measured.copy())
             solution = Solution(self._held, SolveStatus.SUCCESS, 0, 0.0)
         else:
-            start = np.where(self._limited, measured, [wrap_angle(a) for a in measured])
+            if self._all_limited:
+                start = np.array(measured, dtype=float)  # nothing to wrap
+            else:
+                start = np.where(self._limited, measured, [wrap_angle(a) for a in measured])
             solve = (
                 self.solver.solve_targets if isinstance(target, TargetSet) else self.solver.solve
             )

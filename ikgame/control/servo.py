@@ -44,7 +44,7 @@ BRAKE_FLOOR: Final = 0.1
 """Share of a joint's torque limit its braking plans on at least, even where its load leaves
 it less at the pose it is in now."""
 
-FLOAT_LINKS: Final = 40
+FLOAT_LINKS: Final = 30
 """Chains (and trees) up to this many links are driven over Python floats, longer ones over
 numpy arrays: the same numbers either way, whichever is faster."""
 

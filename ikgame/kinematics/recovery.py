@@ -184,6 +184,7 @@ class RobustSolver:
         self._chain = _float_chain(skeleton)
         self._free: list[bool] = (~skeleton.limited).tolist()
         self._frame = object()
+        self._carried = False  # the base moved since the last solve
         self._reach = skeleton.reach
         self._name = ""
         self._solve: Solver = get_solver(solver_name)
@@ -216,6 +217,7 @@ class RobustSolver:
         if same_shape and unmoved:
             return
         self._frame = object()
+        self._carried = same_shape
         if same_shape and self._chain is not None:
             # Only the base moved: the float copies of lengths and limits still hold.
             chain = copy.copy(self._chain)
@@ -365,9 +367,11 @@ class RobustSolver:
             search = self._search
             followed = search is not None and search.aims_at(targets, tol) and search.best_far
             return self._keep(plain, goal, followed)
-        if _out_of_reach(skeleton, targets, tol):
-            # No restart brings a target closer than its branch stretched out: the plain solve
-            # already leans toward it (say, while the base still carries the skeleton there).
+        carried, self._carried = self._carried, False
+        if carried and _out_of_reach(skeleton, targets, tol):
+            # While the base carries the skeleton toward targets still beyond their branches'
+            # reach, no restart brings them closer, and a search would start afresh in every new
+            # frame: the plain solve, leaning toward them, is the answer for now.
             return plain
         return self._recover(
             plain,

@@ -319,7 +319,7 @@ class LinkConfig(_Model):
         5.0e7, gt=0, le=1e15, allow_inf_nan=False, description="Motor torque limit (mass px^2/s^2)."
     )
     max_speed: float = Field(
-        360.0, gt=0, le=36000, allow_inf_nan=False, description="Motor speed limit, deg/s."
+        360.0, ge=0.01, le=36000, allow_inf_nan=False, description="Motor speed limit, deg/s."
     )
     repeat: int = Field(1, ge=1, le=MAX_LINKS, description="Use this link this many times.")
     sprite: SpritePath | None = _sprite_field(
@@ -495,6 +495,11 @@ class ChainConfig(_Model):
         max_length=MAX_LINKS,
         description="The bones of a tree, each parent before its children (give links or bones).",
     )
+    branches_collide: bool = Field(
+        False,
+        description="Bones of different branches collide with each other (a bone never collides "
+        "with its ancestors, descendants or siblings); trees only.",
+    )
 
     @model_validator(mode="after")
     def _links_or_bones(self) -> ChainConfig:
@@ -515,6 +520,10 @@ class ChainConfig(_Model):
         if total > MAX_LINKS:
             raise _invalid(
                 (field,), f"a {noun} has at most {MAX_LINKS} links, this one has {total}", total
+            )
+        if self.bones is None and self.branches_collide:
+            raise _invalid(
+                ("branches_collide",), "a chain of links has no branches: give bones", True
             )
         if self.bones is not None:
             _check_bones(self.bones)

@@ -51,6 +51,8 @@ _IMPULSE: Final = pymunk.Constraint.impulse.fget
 attribute hook."""
 
 _CHAIN_GROUP: Final = 1
+_LINK_TYPE: Final = 1
+"""The collision type of every link's shape."""
 _OBSTACLE_ELASTICITY: Final = 1.0
 """So that a prop's own elasticity is its bounce off an obstacle (pymunk multiplies the two)."""
 
@@ -131,7 +133,10 @@ class World:
         self.bodies: list[pymunk.Body] = []
         self.motors: list[pymunk.SimpleMotor] = []
         self.limit_joints: list[pymunk.RotaryLimitJoint | None] = []
-        shape_filter = pymunk.ShapeFilter(group=_CHAIN_GROUP)
+        collide = level.chain.branches_collide
+        # Links share a group that never collides with itself, unless the tree's branches are
+        # to collide: then a handler lets through only pairs of links from different branches.
+        shape_filter = pymunk.ShapeFilter(group=0 if collide else _CHAIN_GROUP)
 
         self.parents = self.skeleton.parents
         """(n,) parent link index, -1 for a link on the base."""
@@ -168,6 +173,7 @@ class World:
             body.angle = world_angle
             shape = pymunk.Segment(body, (-half, 0), (half, 0), radius)
             shape.filter = shape_filter
+            shape.collision_type = _LINK_TYPE
             shape.friction = 0.8
             pivot = pymunk.PivotJoint(parent, body, parent_anchor, (-half, 0))
             # SimpleMotor drives (b.w - a.w) toward -rate; commands go through set_rates.
@@ -182,6 +188,16 @@ class World:
             self.bodies.append(body)
             self.motors.append(motor)
             self.limit_joints.append(limit_joint)
+
+        if collide:
+            apart = _apart(self.skeleton)
+            index = {shape: i for i, body in enumerate(self.bodies) for shape in body.shapes}
+
+            def begin(arbiter: pymunk.Arbiter, _space: pymunk.Space, _data: object) -> None:
+                a, b = arbiter.shapes
+                arbiter.process_collision = bool(apart[index[a], index[b]])
+
+            self.space.on_collision(_LINK_TYPE, _LINK_TYPE, begin=begin)
 
         for obstacle in level.obstacles:
             self.space.add(_obstacle_shape(self.space.static_body, obstacle))
@@ -230,6 +246,19 @@ class World:
         """(n,) relative angular velocity of each joint (child - parent), rad/s."""
         state, rows = self._state()
         return state[rows.links, 3] - state[rows.parents, 3]
+
+    def joint_state(self) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`joint_angles` and :meth:`joint_velocities` from one read of the bodies.
+
+        >>> from ikgame.level.model import Level
+        >>> world = World(Level.model_validate({"level": {"name": "x", "duration": 1.0},
+        ...     "chain": {"links": [{"length": 50.0}]}, "script": [{"wait": 1.0}]}))
+        >>> [a.tolist() for a in world.joint_state()]
+        [[0.0], [0.0]]
+        """
+        state, rows = self._state()
+        links, parents = state[rows.links], state[rows.parents]
+        return links[:, 2] - parents[:, 2], links[:, 3] - parents[:, 3]
 
     def _state(self) -> tuple[np.ndarray, _Rows]:
         """Every body's x, y, angle and angular velocity in one read (a view of a buffer the
@@ -446,7 +475,7 @@ class World:
         """
         state, _ = self._state()
         # NaN fails the comparison too.
-        return not float(np.max(np.abs(state[:, :3]))) < DIVERGENCE_LIMIT
+        return not float(np.abs(state[:, :3]).max()) < DIVERGENCE_LIMIT
 
     def divergence(self) -> str | None:
         """The first body that blew up (``"link 3"``, ``"prop 2"``, ``"base"``; counting from
@@ -461,6 +490,15 @@ class World:
         named += [(f"prop {i + 1}", b) for i, b in enumerate(self.prop_bodies)]
         sane = _sane(_poses([body for _, body in named]))
         return next((name for (name, _), ok in zip(named, sane, strict=True) if not ok), None)
+
+
+def _apart(skeleton: Skeleton) -> np.ndarray:
+    """(n, n) bool: which pairs of links may collide: neither hangs from the other and they do
+    not share a joint (siblings, or roots on the base)."""
+    related = skeleton.ancestors | skeleton.ancestors.T
+    parents = skeleton.parents
+    siblings = parents[:, None] == parents[None, :]
+    return ~(related | siblings)
 
 
 def _direction(angle: float) -> np.ndarray:

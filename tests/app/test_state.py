@@ -164,3 +164,22 @@ def test_the_help_lists_every_key():
 def test_advance_refuses_negative_time(level_file):
     with pytest.raises(ValueError, match="seconds"):
         _state(level_file).advance(-1.0)
+
+
+def test_the_mouse_drags_the_effector_nearest_to_where_it_pressed():
+    from ikgame.level.library import LEVELS_DIR
+
+    state = PlayState(LEVELS_DIR / "15_two_hands.toml", size=(320, 180))
+    hands = dict(zip(state.sim.effector_names, state.sim.world.effector_positions(), strict=True))
+    pixel = state.camera.world_to_pixel([hands["right_hand"] + (5.0, 5.0)])[0]
+    state.handle(MouseDown(tuple(pixel)))
+    assert set(state.sim.targets) >= {"right_hand"}
+    # One window pixel is a few world px at this size.
+    assert state.sim.targets["right_hand"] == pytest.approx(hands["right_hand"] + 5.0, abs=4.0)
+    state.handle(MouseUp())
+    scripted = state.sim.script.targets.get("right_hand")
+    assert (
+        "right_hand" not in state.sim.targets
+        if scripted is None
+        else state.sim.targets["right_hand"] == pytest.approx(scripted)
+    )

@@ -5,6 +5,7 @@ import math
 import numpy as np
 import pytest
 
+from ikgame.control._floats import FloatInertia
 from ikgame.control.dynamics import ChainInertia, Pose, inverse_dynamics, plan_drive
 
 GRAVITY = 900.0
@@ -118,3 +119,134 @@ def test_no_factor_is_taken_that_leaves_a_joint_past_its_limit():
     drive = plan_drive(arm, angles, np.zeros(2), sag, (0.0, -2000.0), limit)
     assert np.all(np.abs(drive.loads.torques) <= limit * (1 + 1e-9))
     assert drive.saturated[0]
+
+
+# -- trees -------------------------------------------------------------------------------------
+
+Y_PARENTS = np.array([-1, 0, 0])  # a stem with two branches at its end
+TREE_PARENTS = np.array([-1, 0, 1, 1, -1, 4, 0, 6])  # two roots, a fork, a side branch
+
+
+def _tree(parents, seed=0):
+    n = len(parents)
+    rng = np.random.default_rng(seed)
+    lengths = rng.uniform(8, 40, n)
+    masses = rng.uniform(0.1, 1.0, n)
+    return ChainInertia(lengths, masses, masses * lengths**2 / 12, parents=np.asarray(parents))
+
+
+def _centres(chain, offsets, q):
+    """Reference forward kinematics, link by link: centre and world angle of each link."""
+    n = chain.count
+    angle, joint, end = np.zeros(n), np.zeros((n, 2)), np.zeros((n, 2))
+    for i, p in enumerate(chain.parents):
+        angle[i] = q[i] + (angle[p] if p >= 0 else 0.0)
+        joint[i] = end[p] if p >= 0 else offsets[i]
+        end[i] = joint[i] + chain.lengths[i] * np.array([np.cos(angle[i]), np.sin(angle[i])])
+    return (joint + end) / 2, angle, joint
+
+
+def _virtual_work_torques(chain, offsets, q, qd, qdd, gravity):
+    """Joint torques by d'Alembert's principle with finite differences: no Newton-Euler at all.
+
+    tau_i = sum_j m_j (a_j - g) . dc_j/dq_i + I_j alpha_j dtheta_j/dq_i, with each centre's
+    acceleration a_j the second difference of its path under q(t) = q + qd t + qdd t^2 / 2.
+    """
+    n, h, dq = chain.count, 1e-3, 1e-6
+    path = [_centres(chain, offsets, q + qd * t + qdd * t * t / 2)[0] for t in (-h, 0.0, h)]
+    accel = (path[0] - 2 * path[1] + path[2]) / h**2
+    _, angle, _ = _centres(chain, offsets, q)
+    alpha = _centres(chain, offsets, qdd)[1]  # world angular accelerations: sums along the tree
+    torques = np.zeros(n)
+    for i in range(n):
+        step = np.zeros(n)
+        step[i] = dq
+        dc = (_centres(chain, offsets, q + step)[0] - _centres(chain, offsets, q - step)[0]) / (
+            2 * dq
+        )
+        turns = (_centres(chain, offsets, q + step)[1] - angle) / dq  # 0 or 1: exact
+        torques[i] = np.sum(chain.masses[:, None] * (accel - gravity) * dc)
+        torques[i] += np.sum(chain.moments * alpha * np.round(turns))
+    return torques, accel, angle
+
+
+@pytest.mark.parametrize("parents", [Y_PARENTS, TREE_PARENTS], ids=["y", "tree"])
+@pytest.mark.parametrize("seed", range(3))
+def test_tree_loads_match_virtual_work_wherever_the_roots_sit(parents, seed):
+    chain = _tree(parents, seed)
+    n = chain.count
+    rng = np.random.default_rng(10 + seed)
+    q, qd, qdd = rng.uniform(-2, 2, n), rng.normal(size=n), rng.normal(size=n) * 5
+    offsets = rng.uniform(-30, 30, (n, 2))  # where each root's joint sits on the still base
+    gravity = np.array([0.0, -GRAVITY])
+    torques, accel, angle = _virtual_work_torques(chain, offsets, q, qd, qdd, gravity)
+    loads = inverse_dynamics(chain, angle, chain.along(qd), chain.along(qdd), gravity)
+    np.testing.assert_allclose(loads.torques, torques, rtol=1e-6, atol=1e-3 * np.abs(torques).max())
+    # The pivot at each joint carries what accelerates everything beyond it, against gravity.
+    forces = chain.masses[:, None] * (accel - gravity)
+    for i in range(n - 1, -1, -1):
+        if parents[i] >= 0:
+            forces[parents[i]] += forces[i]
+    np.testing.assert_allclose(loads.forces, forces, rtol=1e-6, atol=1e-6 * np.abs(forces).max())
+
+
+def test_tree_inertia_is_everything_beyond_each_joint_held_rigid():
+    chain = _tree(TREE_PARENTS, seed=5)
+    q = np.random.default_rng(5).uniform(-2, 2, chain.count)
+    centres, angle, joints = _centres(chain, np.zeros((chain.count, 2)), q)
+    beyond = [{i} for i in range(chain.count)]
+    for i in range(chain.count - 1, -1, -1):
+        if TREE_PARENTS[i] >= 0:
+            beyond[TREE_PARENTS[i]] |= beyond[i]
+    expected = [
+        sum(chain.moments[j] + chain.masses[j] * np.sum((centres[j] - joints[i]) ** 2) for j in b)
+        for i, b in enumerate(beyond)
+    ]
+    np.testing.assert_allclose(Pose(chain, angle).inertia(), expected, rtol=1e-9)
+
+
+def test_a_chain_given_its_parents_is_the_same_chain_to_the_last_bit():
+    chain = _chain(12, seed=7)
+    serial = ChainInertia(chain.lengths, chain.masses, chain.moments, parents=np.arange(12) - 1)
+    rng = np.random.default_rng(7)
+    angles, omega, alpha = (rng.normal(size=12) for _ in range(3))
+    for a, b in [(Pose(chain, angles), Pose(serial, angles))]:
+        assert np.array_equal(a.inertia(), b.inertia())
+        one, other = a.loads(omega, alpha, (0.0, -900.0)), b.loads(omega, alpha, (0.0, -900.0))
+        assert np.array_equal(one.torques, other.torques)
+        assert np.array_equal(one.forces, other.forces)
+    assert np.array_equal(serial.along(alpha), np.cumsum(alpha))
+    assert np.array_equal(serial.beyond(alpha), np.cumsum(alpha[::-1])[::-1])
+
+
+@pytest.mark.parametrize("parents", [None, Y_PARENTS, TREE_PARENTS], ids=["chain", "y", "tree"])
+def test_the_float_path_gives_the_same_floats_as_numpy(parents):
+    chain = _chain(9, seed=1) if parents is None else _tree(parents, seed=1)
+    n = chain.count
+    floats = FloatInertia(chain)
+    rng = np.random.default_rng(3)
+    for _ in range(20):
+        angles, omega, alpha = (rng.normal(size=n) * 2 for _ in range(3))
+        pose, fast = Pose(chain, angles), floats.pose(angles)
+        assert fast.inertia() == pose.inertia().tolist()
+        for kwargs in (
+            {"gravity": (0.0, -900.0)},
+            {"omega": omega},
+            {"alpha": alpha},
+            {"omega": omega, "alpha": alpha, "gravity": (3.0, -900.0)},
+        ):
+            loads = pose.loads(**{k: np.asarray(v) for k, v in kwargs.items()})
+            torques, fx, fy = fast.loads(
+                **{k: v.tolist() if isinstance(v, np.ndarray) else v for k, v in kwargs.items()}
+            )
+            assert torques == loads.torques.tolist()
+            assert fx == loads.forces[:, 0].tolist() and fy == loads.forces[:, 1].tolist()
+        assert floats.along(omega.tolist()) == chain.along(omega).tolist()
+        assert floats.beyond(omega.tolist()) == chain.beyond(omega).tolist()
+
+
+@pytest.mark.parametrize("parents", [[0], [-1, 1], [-2, 0], [-1, 0, 3]])
+def test_parents_must_come_first(parents):
+    n = len(parents)
+    with pytest.raises(ValueError, match="parents"):
+        ChainInertia(np.ones(n), np.ones(n), np.ones(n), parents=np.array(parents))

@@ -5,6 +5,8 @@ import math
 import numpy as np
 import pytest
 
+from ikgame.control.dynamics import ChainInertia
+from ikgame.control.servo import Servo
 from ikgame.kinematics import forward_kinematics
 from ikgame.level.model import Level
 from ikgame.physics.world import build_skeleton
@@ -91,3 +93,28 @@ def test_long_chain_timing_does_not_depend_on_the_tick_rate(tick_rate):
     reference = time_to_reach(240)
     assert time_to_reach(tick_rate) == pytest.approx(reference, rel=0.15)
     assert math.isfinite(reference)
+
+
+@pytest.mark.parametrize("parents", [None, [-1, 0, 0, 2, -1, 4]], ids=["chain", "tree"])
+def test_the_float_servo_commands_what_the_numpy_servo_does(parents):
+    n = 6
+    rng = np.random.default_rng(11)
+    lengths, masses = rng.uniform(10, 60, n), rng.uniform(0.2, 2.0, n)
+    inertia = ChainInertia(
+        lengths,
+        masses,
+        masses * lengths**2 / 12,
+        parents=None if parents is None else np.array(parents),
+    )
+    limits = dict(max_torque=rng.uniform(2e4, 2e5, n), max_speed=np.full(n, 3.0), gain=12.0)
+    fast, slow = Servo(inertia, **limits), Servo(inertia, **limits)
+    slow._floats = None  # the numpy path, as chains longer than FLOAT_LINKS take
+    for tick in range(200):
+        error = rng.normal(size=n) * (0.05 if tick % 3 else 1.0)
+        angles, velocities = rng.uniform(-3, 3, n), rng.normal(size=n) * 2
+        goal = None if tick % 2 else rng.normal(size=n)
+        one = fast.command(error, angles, velocities, (0.0, -900.0), 1 / 240, goal)
+        other = slow.command(error, angles, velocities, (0.0, -900.0), 1 / 240, goal)
+        for field in ("rates", "torques", "forces", "budgets"):
+            assert np.array_equal(getattr(one, field), getattr(other, field)), (tick, field)
+        assert np.array_equal(fast.stalled, slow.stalled)

@@ -62,7 +62,9 @@ def test_every_field_of_every_table_is_in_the_reference_with_its_default():
         rows = [line for line in reference.splitlines() if line.startswith(f"| `{key}` |")]
         assert rows, path
         if "default" in prop and not isinstance(prop["default"], dict | list | type(None)):
-            default = f"`{prop['default']}`".replace("`True`", "`true`")
+            default = f"`{prop['default']}`".replace("`True`", "`true`").replace(
+                "`False`", "`false`"
+            )
             default = default if not isinstance(prop["default"], str) else f'`"{prop["default"]}"`'
             assert any(f"| {default} |" in row for row in rows), (path, default)
 

@@ -18,7 +18,12 @@ from ikgame.level.script import ScriptRunner
 ROOT = Path(__file__).resolve().parents[2]
 TREES = sorted((ROOT / "tests" / "data" / "levels" / "trees").glob("*.toml"))
 STRESS = sorted((ROOT / "benchmarks" / "stress_levels").glob("*.toml"))
-CHAINS = [*sorted(LEVELS_DIR.glob("*.toml")), *STRESS]
+# The shipped and stress levels given as chains of links (the tree levels give bones).
+CHAINS = [
+    path
+    for path in (*sorted(LEVELS_DIR.glob("*.toml")), *STRESS)
+    if "[[chain.bones]]" not in path.read_text(encoding="utf-8")
+]
 HEAD = '[level]\nname = "t"\nduration = 2.0\n[chain]\n'
 
 
@@ -300,3 +305,12 @@ def test_a_tree_level_plays_through_its_script_when_every_effector_is_on_its_tar
     assert [bool(c.moves_base) for c in changes] == [
         s.set.moves_base for s in level.script if hasattr(s, "set")
     ]
+
+
+def test_branches_collide_is_for_trees_only():
+    problems = _problems(
+        HEAD
+        + "branches_collide = true\n[[chain.links]]\nlength = 10.0\n"
+        + "[[script]]\nwait = 1.0\n"
+    )
+    assert any("branches_collide" in p and "no branches" in p for p in problems), problems

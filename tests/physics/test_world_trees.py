@@ -115,3 +115,53 @@ def test_a_turn_takes_the_shorter_way_round():
         world.step(1 / 240)
     # From 170 deg to -170 deg is 20 deg through 180, not 340 the other way.
     assert world.base_body.angle == pytest.approx(math.radians(190.0))
+
+
+def _cousins(collide: bool) -> World:
+    """A spine with two arms bent toward each other: their forearms are cousins."""
+    arm = {"length": 60.0, "width": 12.0, "max_torque": 4.0e6}
+    return World(
+        Level.model_validate(
+            {
+                "level": {"name": "cousins", "duration": 5.0},
+                "world": {"gravity": [0.0, 0.0]},
+                "chain": {
+                    "angle": 90.0,
+                    "branches_collide": collide,
+                    "bones": [
+                        {"name": "spine", "length": 50.0, "width": 12.0},
+                        {"name": "a", "parent": "spine", "angle": 60.0} | arm,
+                        {"name": "a2", "parent": "a", "angle": -60.0} | arm,
+                        {"name": "b", "parent": "spine", "angle": -60.0} | arm,
+                        {"name": "b2", "parent": "b", "angle": 60.0} | arm,
+                    ],
+                },
+                "script": [{"wait": 1.0}],
+            }
+        )
+    )
+
+
+def _gap(world: World) -> float:
+    """Closest distance between the axes of the two forearms, px (sampled)."""
+    points = world.joint_positions()
+    n = world.count
+    s = np.linspace(0.0, 1.0, 41)[:, None]
+    a = points[2] + s * (points[n + 2] - points[2])
+    b = points[4] + s * (points[n + 4] - points[4])
+    return float(np.hypot(*(a[:, None, :] - b[None, :, :]).transpose(2, 0, 1)).min())
+
+
+@pytest.mark.parametrize("collide", [False, True])
+def test_branches_collide_only_when_the_level_asks(collide):
+    world = _cousins(collide)
+    # Both forearms swing in toward the spine's axis, and past it.
+    world.set_rates(np.array([0.0, 0.0, -2.0, 0.0, 2.0]))
+    gaps = []
+    for _ in range(240):
+        world.step(1 / 240)
+        gaps.append(_gap(world))
+    if collide:
+        assert min(gaps) > 12.0 - 1.0  # two 6 px radii, less pymunk's contact slop
+    else:
+        assert min(gaps) < 1.0  # they pass through each other
