@@ -4,28 +4,31 @@ Pure numpy, no pymunk: :mod:`benchmarks.quality` records a run tick by tick and 
 here, and the tests feed synthetic trajectories with known answers. Units: px, s, radians in,
 degrees out where a name says ``deg``.
 
-The second half answers "is this target reachable?" for a chain: a pose inside the joint limits
-whose tip is within tolerance, whose links keep clear of the obstacles, and whose static gravity
-torque every motor can hold (:func:`find_witness`).
+The second half answers "are these targets reachable?" for a chain or a tree of links: a pose
+inside the joint limits that puts every targeted link end within tolerance, whose links keep clear
+of the obstacles, and whose static gravity torque every motor can hold (:func:`find_witness`).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
 
 import numpy as np
 
 __all__ = [
     "ChainSpec",
+    "ancestors",
     "approach_overshoot",
     "chain_points",
     "find_witness",
     "gravity_torques",
     "limit_excursion_deg",
+    "link_segments",
     "obstacle_clearance",
     "rest_jitter",
+    "span",
     "spin_joints",
     "stretched_toward",
 ]
@@ -115,9 +118,9 @@ def stretched_toward(
     return bool(np.hypot(*(tip - nearest)) <= tolerance)
 
 
-@dataclass(frozen=True)
+@dataclasses.dataclass(frozen=True)
 class ChainSpec:
-    """A serial chain for the kinematic checks: px, radians, mass units, px/s^2.
+    """A chain or tree of links for the kinematic checks: px, radians, mass units, px/s^2.
 
     Attributes:
         lengths, masses, widths, max_torque: (n,) per link.
@@ -126,6 +129,9 @@ class ChainSpec:
         gravity: (2,) px/s^2.
         segments: (k, 5) obstacle segments ``(ax, ay, bx, by, radius)``.
         circles: (c, 3) obstacle discs ``(x, y, radius)``.
+        parents: (n,) int, each link's parent (listed before it), -1 for a root; None: a chain.
+        offsets: (n, 2) where each root's joint sits in the base frame (x along ``base_angle``,
+            y to its left), zero rows for the other links; None: every root on the base.
     """
 
     lengths: np.ndarray
@@ -139,15 +145,37 @@ class ChainSpec:
     gravity: np.ndarray
     segments: np.ndarray
     circles: np.ndarray
+    parents: np.ndarray | None = None
+    offsets: np.ndarray | None = None
 
     @property
     def reach(self) -> float:
-        """Length of the chain stretched straight, px."""
-        return float(self.lengths.sum())
+        """Length of the chain stretched straight (of a tree: its longest path from a root),
+        px."""
+        if self.parents is None:
+            return float(self.lengths.sum())
+        return float((ancestors(self) @ self.lengths).max())
+
+
+def ancestors(spec: ChainSpec) -> np.ndarray:
+    """(n, n) bool: ``[i, j]`` when turning joint ``j`` moves the end of link ``i``.
+
+    >>> tree = dataclasses.replace(_doc_spec(), parents=np.array([-1, -1]))
+    >>> ancestors(tree).astype(int).tolist(), ancestors(_doc_spec()).astype(int).tolist()
+    ([[1, 0], [0, 1]], [[1, 0], [1, 1]])
+    """
+    n = len(spec.lengths)
+    if spec.parents is None:
+        return np.tril(np.ones((n, n), dtype=bool))
+    mask = np.eye(n, dtype=bool)
+    for i, parent in enumerate(spec.parents):
+        if parent >= 0:
+            mask[i] |= mask[parent]
+    return mask
 
 
 def chain_points(spec: ChainSpec, angles: np.ndarray) -> np.ndarray:
-    """(n + 1, 2) joint positions then the tip for local ``angles`` (radians), px.
+    """(n + 1, 2) joint positions then the tip of a chain for local ``angles`` (radians), px.
 
     >>> spec = _doc_spec()
     >>> chain_points(spec, np.array([0.0, 0.0])).round(6).tolist()
@@ -158,21 +186,53 @@ def chain_points(spec: ChainSpec, angles: np.ndarray) -> np.ndarray:
     return np.vstack((spec.base, spec.base + np.cumsum(steps, axis=0)))
 
 
-def gravity_torques(spec: ChainSpec, points: np.ndarray) -> np.ndarray:
+def link_segments(spec: ChainSpec, angles: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(n, 2) starts and (n, 2) ends of the links of a chain or tree for local ``angles``, px.
+
+    A root's angle is relative to ``base_angle``, any other link's to its parent's.
+
+    >>> spec = dataclasses.replace(_doc_spec(), parents=np.array([-1, -1]),
+    ...                            offsets=np.array([[0.0, 10.0], [20.0, -10.0]]))
+    >>> starts, ends = link_segments(spec, np.array([0.0, -np.pi / 2]))
+    >>> starts.round(6).tolist(), ends.round(6).tolist()
+    ([[-10.0, 0.0], [10.0, 20.0]], [[-10.0, 100.0], [110.0, 20.0]])
+    """
+    if spec.parents is None:
+        points = chain_points(spec, angles)
+        return points[:-1], points[1:]
+    n = len(spec.lengths)
+    c, s = math.cos(spec.base_angle), math.sin(spec.base_angle)
+    offsets = np.zeros((n, 2)) if spec.offsets is None else spec.offsets
+    roots = spec.base + offsets @ np.array(((c, s), (-s, c)))
+    starts, ends, world = np.empty((n, 2)), np.empty((n, 2)), np.empty(n)
+    for i, parent in enumerate(spec.parents):
+        if parent < 0:
+            starts[i], world[i] = roots[i], spec.base_angle + angles[i]
+        else:
+            starts[i], world[i] = ends[parent], world[parent] + angles[i]
+        ends[i] = starts[i] + spec.lengths[i] * np.array((math.cos(world[i]), math.sin(world[i])))
+    return starts, ends
+
+
+def gravity_torques(spec: ChainSpec, starts: np.ndarray, ends: np.ndarray) -> np.ndarray:
     """(n,) static torque each joint's motor must hold against gravity in a pose, absolute.
 
     >>> spec = _doc_spec()
-    >>> gravity_torques(spec, chain_points(spec, np.array([-np.pi / 2, 0.0]))).tolist()
+    >>> gravity_torques(spec, *link_segments(spec, np.array([-np.pi / 2, 0.0]))).tolist()
     [200000.0, 50000.0]
     """
-    com = (points[:-1] + points[1:]) / 2.0
+    com = (starts + ends) / 2.0
     force = spec.masses[:, None] * spec.gravity
-    # Torque about joint j of the links from j on: sum_k (com_k - p_j) x f_k.
     moment = com[:, 0] * force[:, 1] - com[:, 1] * force[:, 0]
-    total_force = np.cumsum(force[::-1], axis=0)[::-1]
-    outer = np.cumsum(moment[::-1])[::-1]
-    joints = points[:-1]
-    return np.abs(outer - (joints[:, 0] * total_force[:, 1] - joints[:, 1] * total_force[:, 0]))
+    # Torque about joint j of the links it carries (its subtree): sum_k (com_k - p_j) x f_k.
+    if spec.parents is None:
+        total_force = np.cumsum(force[::-1], axis=0)[::-1]
+        outer = np.cumsum(moment[::-1])[::-1]
+    else:
+        carried = ancestors(spec).T
+        total_force = carried @ force
+        outer = carried @ moment
+    return np.abs(outer - (starts[:, 0] * total_force[:, 1] - starts[:, 1] * total_force[:, 0]))
 
 
 def _segment_distance(p0: np.ndarray, p1: np.ndarray, q0: np.ndarray, q1: np.ndarray) -> np.ndarray:
@@ -204,42 +264,67 @@ def _segment_distance(p0: np.ndarray, p1: np.ndarray, q0: np.ndarray, q1: np.nda
     return np.where(crossing, 0.0, d)
 
 
-def obstacle_clearance(spec: ChainSpec, points: np.ndarray) -> float:
+def obstacle_clearance(spec: ChainSpec, starts: np.ndarray, ends: np.ndarray) -> float:
     """Smallest gap between a link's surface and an obstacle's, px (inf with no obstacles).
 
     >>> spec = _doc_spec()
-    >>> obstacle_clearance(spec, chain_points(spec, np.zeros(2)))
+    >>> obstacle_clearance(spec, *link_segments(spec, np.zeros(2)))
     36.0
     """
     gap = math.inf
     radii = spec.widths / 2.0
     for ax, ay, bx, by, radius in spec.segments:
-        d = _segment_distance(points[:-1], points[1:], np.array([ax, ay]), np.array([bx, by]))
+        d = _segment_distance(starts, ends, np.array([ax, ay]), np.array([bx, by]))
         gap = min(gap, float((d - radii - radius).min()))
     for cx, cy, radius in spec.circles:
         centre = np.array([cx, cy])
-        d = _segment_distance(points[:-1], points[1:], centre, centre)
+        d = _segment_distance(starts, ends, centre, centre)
         gap = min(gap, float((d - radii - radius).min()))
     return gap
 
 
+def span(spec: ChainSpec, a: int, b: int) -> float:
+    """The farthest apart the ends of links ``a`` and ``b`` can ever be, px.
+
+    Both hang from the end of their last common ancestor (or from their roots' joints, when
+    they share none), so they are at most the lengths from there apart; targets farther apart
+    than that plus twice the tolerance cannot be met together in any pose.
+
+    >>> fork = dataclasses.replace(_doc_spec(), lengths=np.array([100.0, 60.0, 50.0]),
+    ...     parents=np.array([-1, 0, 0]), masses=np.ones(3), widths=np.ones(3))
+    >>> span(fork, 1, 2), span(fork, 0, 2)
+    (110.0, 50.0)
+    """
+    mask = ancestors(spec)
+    shared = mask[a] & mask[b]
+    own = (mask[a] & ~shared) @ spec.lengths + (mask[b] & ~shared) @ spec.lengths
+    if shared.any():
+        return float(own)
+    starts, _ = link_segments(spec, np.zeros(len(spec.lengths)))
+    roots = [int(np.flatnonzero(mask[i])[0]) for i in (a, b)]
+    return float(own + np.hypot(*(starts[roots[0]] - starts[roots[1]])))
+
+
 def find_witness(
     spec: ChainSpec,
-    target: Sequence[float],
+    target: Sequence[float] | np.ndarray,
     tolerance: float,
     *,
+    links: Sequence[int] | None = None,
     seed: int = 0,
     samples: int = 400,
     refine: int = 24,
 ) -> np.ndarray | None:
     """A pose (radians) proving ``target`` reachable, or None if the search found none.
 
-    A witness keeps every joint inside its limits, puts the tip within half of ``tolerance``,
-    keeps each link clear of the obstacles, and asks no motor for more than its ``max_torque``
-    to hold it still against gravity. The search samples poses inside the limits (and the
-    evenly bent poses), refines those and the ``refine`` closest by damped least squares clamped to the
-    limits, and returns the first that passes: a found witness is a proof, a miss only a
-    strong hint.
+    ``target`` is one point (x, y) for the end of the last link, or one point per link of
+    ``links`` (a tree's effectors, all at once). A witness keeps every joint inside its limits,
+    puts every targeted end within half of ``tolerance``, keeps each link clear of the obstacles,
+    and asks no motor for more than its ``max_torque`` to hold it still against gravity. The
+    search samples poses inside the limits (and the evenly bent poses), refines those and the
+    ``refine`` closest by damped least squares on all the targets at once, clamped to the
+    limits, and returns the first that passes: a found witness is a proof, a miss only a strong
+    hint.
 
     >>> spec = _doc_spec()
     >>> pose = find_witness(spec, (120.0, 120.0), 6.0)
@@ -247,44 +332,60 @@ def find_witness(
     True
     >>> find_witness(spec, (0.0, 260.0), 6.0) is None
     True
+    >>> fork = dataclasses.replace(_doc_spec(), parents=np.array([-1, -1]))
+    >>> find_witness(fork, [(-80.0, 60.0), (90.0, 40.0)], 6.0, links=[0, 1]) is not None
+    True
     """
-    goal = np.asarray(target, dtype=float)
+    n = len(spec.lengths)
+    ends_of = np.array([n - 1] if links is None else links, dtype=int)
+    goals = np.asarray(target, dtype=float).reshape(len(ends_of), 2)
     rng = np.random.default_rng(seed)
     lo = np.where(np.isfinite(spec.lower), spec.lower, -math.pi)
     hi = np.where(np.isfinite(spec.upper), spec.upper, math.pi)
-    n = len(spec.lengths)
     # Even bends (the straight pose among them) seed long chains, which random poses coil up.
     bends = [np.clip(np.full(n, b), lo, hi) for b in np.radians((0.0, -2.0, 2.0, -10.0, 10.0))]
     random = rng.uniform(lo, hi, (samples, n))
-    tips = np.array([chain_points(spec, pose)[-1] for pose in random])
-    nearest = random[np.argsort(np.hypot(*(tips - goal).T), kind="stable")[:refine]]
+    misses = np.array([_misses(spec, pose, ends_of, goals).sum() for pose in random])
+    nearest = random[np.argsort(misses, kind="stable")[:refine]]
     for start in (*bends, (lo + hi) / 2.0, *nearest):
-        pose = _refine(spec, start, goal, lo, hi)
-        points = chain_points(spec, pose)
+        pose = _refine(spec, start, ends_of, goals, lo, hi)
+        starts, ends = link_segments(spec, pose)
         if (
-            np.hypot(*(points[-1] - goal)) <= tolerance / 2.0
-            and np.all(gravity_torques(spec, points) <= spec.max_torque)
-            and obstacle_clearance(spec, points) >= 0.0
+            np.all(_misses(spec, pose, ends_of, goals) <= tolerance / 2.0)
+            and np.all(gravity_torques(spec, starts, ends) <= spec.max_torque)
+            and obstacle_clearance(spec, starts, ends) >= 0.0
         ):
             return pose
     return None
 
 
+def _misses(spec: ChainSpec, pose: np.ndarray, links: np.ndarray, goals: np.ndarray) -> np.ndarray:
+    """(k,) distance of each targeted link end from its goal in ``pose``, px."""
+    return np.hypot(*(link_segments(spec, pose)[1][links] - goals).T)
+
+
 def _refine(
-    spec: ChainSpec, pose: np.ndarray, goal: np.ndarray, lo: np.ndarray, hi: np.ndarray
+    spec: ChainSpec,
+    pose: np.ndarray,
+    links: np.ndarray,
+    goals: np.ndarray,
+    lo: np.ndarray,
+    hi: np.ndarray,
 ) -> np.ndarray:
-    """Damped least squares toward ``goal``, clamped to the limits after every step."""
+    """Damped least squares toward every goal at once, clamped to the limits after each step."""
     pose = pose.copy()
+    moves = ancestors(spec)[links]
+    damping = 0.05 * spec.reach
     for _ in range(200):
-        points = chain_points(spec, pose)
-        error = goal - points[-1]
-        if np.hypot(*error) < 1e-3:
+        starts, ends = link_segments(spec, pose)
+        error = goals - ends[links]
+        if np.hypot(*error.T).max() < 1e-3:
             break
-        # Column j of the Jacobian: z x (tip - joint j).
-        lever = points[-1] - points[:-1]
-        jac = np.vstack((-lever[:, 1], lever[:, 0]))
-        damping = 0.05 * spec.reach
-        step = jac.T @ np.linalg.solve(jac @ jac.T + damping**2 * np.eye(2), error)
+        # Rows 2j, 2j + 1: the end of links[j]; column i: z x (that end - joint i), if i moves it.
+        lever = ends[links][:, None, :] - starts[None, :, :]
+        jac = np.stack((-lever[..., 1] * moves, lever[..., 0] * moves), axis=1)
+        jac = jac.reshape(2 * len(links), -1)
+        step = jac.T @ np.linalg.solve(jac @ jac.T + damping**2 * np.eye(len(jac)), error.ravel())
         pose = np.clip(pose + step, lo, hi)
     return pose
 

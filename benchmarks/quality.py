@@ -3,12 +3,16 @@
 Runs every stress level (``benchmarks/stress_levels/``) with each IK solver in the physics world
 and prints one table of level x solver: targets reached, time to reach, overshoot, rest jitter,
 joint-limit excursion, spins, torque-saturated frames and the solver states the steps ended in,
-each cell marked against the thresholds below. docs/quality.md defines every measure.
+each cell marked against the thresholds below; a creature's footing too. A tree's reach step
+is measured on all of its effectors: the worst of them counts. docs/quality.md defines every
+measure.
 
 Only the public simulation API is used: ``ikgame.Simulation(level, solver=..., record=False)``,
 ``step()``, ``done``, ``diverged``, ``joint_positions()``, ``joint_angles()``, ``last_tick``
-(``solver_status``, ``torque_limited``), ``target``, ``script.step_index``, ``script.steps``
-and ``result``. The output is the same on every run apart from the wall times.
+(``solver_status``, ``torque_limited``), ``targets``, ``effector_names``, ``world``
+(``effector_positions()``, ``skeleton``), ``script.step_index``, ``script.steps`` and
+``result``; the kinematic optimum of a conflict comes from ``ikgame.kinematics.RobustSolver``.
+The output is the same on every run apart from the wall times.
 """
 
 from __future__ import annotations
@@ -38,6 +42,7 @@ from rich.console import Console
 from rich.table import Table
 
 import ikgame
+from ikgame.kinematics import RobustSolver, Skeleton, TargetSet
 from ikgame.level.model import CircleObstacle, Level, ReachStep, SegmentObstacle
 
 STRESS_DIR: Final = Path(__file__).resolve().parent / "stress_levels"
@@ -51,11 +56,18 @@ TORQUE_BOUND: Final = "torque_bound"
 """Within length, beyond the torque budget: come to rest where the torque runs out."""
 JAMMED: Final = "jammed"
 """Within length, but an obstacle is in the way: come to rest and report ``blocked``."""
+CONFLICT: Final = "conflict"
+"""Targets of one tree that no pose meets together: come to rest at the weighted least-squares
+optimum (each effector's error within ``CONFLICT_PX`` of the kinematic optimum's)."""
+
+CONFLICT_STEP: Final = 6
+"""The step of ``17_two_arms`` that pulls the hands apart."""
 
 EXPECTATIONS: Final[dict[str, dict[int, str]]] = {
     "09_just_out_of_reach.toml": {1: OUT_OF_REACH, 3: OUT_OF_REACH},
     "13_heavy_weak.toml": {0: TORQUE_BOUND},
     "16_jammed.toml": {1: JAMMED},
+    "17_two_arms.toml": {CONFLICT_STEP: CONFLICT},
 }
 """Stress level file -> {step index as the run counts them: the kind of an unreachable step}.
 Every other reach step is reachable (tests/test_stress_levels.py proves it with a pose)."""
@@ -82,6 +94,12 @@ REST_WINDOW_S: Final = 0.5
 """The rest jitter is measured over this last part of a step, s."""
 SPIN_DEG: Final = 180.0
 """A joint turning through more than this within a hold spins, degrees."""
+CONFLICT_PX: Final = 1.0
+"""Largest difference between an effector's error at rest and at the kinematic optimum, px."""
+SLIP_PX: Final = 2.0
+"""Largest distance a planted foot may slide, px."""
+SINK_PX: Final = 2.0
+"""Largest depth a foot may sink into the ground, px."""
 
 _STATE_LETTERS: Final = {"success": "s", "processing": "p", "failure": "f", "blocked": "b"}
 _EPS: Final = 1e-9
@@ -102,6 +120,9 @@ class StepReport:
     spins: int
     final_state: str
     expectation_met: bool | None
+    optimum_gap_px: float | None = None
+    """For a conflict: the largest difference between an effector's error at rest and its
+    error at the kinematic optimum, px."""
 
 
 @dataclass
@@ -126,6 +147,18 @@ class RunReport:
     checks: dict[str, bool]
     wall_s: float
     steps: list[StepReport] = field(default_factory=list)
+    footing: dict[str, dict[str, float | int]] = field(default_factory=dict)
+    """A creature's footing from ``results.json``: per leg steps, landing, slip, sink (px)."""
+
+    @property
+    def slip_px(self) -> float | None:
+        """The farthest a planted foot slid, px (None without a gait)."""
+        return max((leg["slip"] for leg in self.footing.values()), default=None)
+
+    @property
+    def sink_px(self) -> float | None:
+        """The deepest a foot sank into the ground, px (None without a gait)."""
+        return max((leg["sink"] for leg in self.footing.values()), default=None)
 
     @property
     def passed(self) -> bool:
@@ -139,7 +172,9 @@ class _Trace:
 
     step: list[int] = field(default_factory=list)
     time: list[float] = field(default_factory=list)
-    tip: list[np.ndarray] = field(default_factory=list)
+    effectors: list[np.ndarray] = field(default_factory=list)
+    targets: list[dict[str, np.ndarray]] = field(default_factory=list)
+    skeleton: list[Skeleton] = field(default_factory=list)
     base: list[np.ndarray] = field(default_factory=list)
     angles: list[np.ndarray] = field(default_factory=list)
     saturated: list[bool] = field(default_factory=list)
@@ -147,8 +182,9 @@ class _Trace:
 
 
 def chain_spec(level: Level) -> ChainSpec:
-    """The level's chain and obstacles for the kinematic checks (radians, px)."""
+    """The level's chain or tree and obstacles for the kinematic checks (radians, px)."""
     links = level.chain.expanded_links
+    tree = level.chain.bones is not None
     limits = [link.limits_rad or (-math.inf, math.inf) for link in links]
     segments = [(*o.a, *o.b, o.radius) for o in level.obstacles if isinstance(o, SegmentObstacle)]
     circles = [(*o.center, o.radius) for o in level.obstacles if isinstance(o, CircleObstacle)]
@@ -164,7 +200,17 @@ def chain_spec(level: Level) -> ChainSpec:
         gravity=np.array(level.world.gravity, dtype=float),
         segments=np.array(segments, dtype=float).reshape(-1, 5),
         circles=np.array(circles, dtype=float).reshape(-1, 3),
+        parents=np.array([link.parent_index for link in links]) if tree else None,
+        offsets=np.array([link.at for link in links], dtype=float) if tree else None,
     )
+
+
+def step_targets(level: Level, step: ReachStep) -> dict[str, tuple[float, float]]:
+    """The points a reach step aims at, by effector name (a bare point aims the only effector
+    the script moves: a chain's ``tip``)."""
+    if isinstance(step.reach, dict):
+        return dict(step.reach)
+    return {level.script_effectors[0]: step.reach}
 
 
 def stress_levels() -> list[Path]:
@@ -189,11 +235,12 @@ def _record(sim: ikgame.Simulation) -> _Trace:
         info = sim.step()
         if sim.diverged:
             break
-        points = sim.joint_positions()
         trace.step.append(step)
         trace.time.append(info.time)
-        trace.tip.append(points[-1])
-        trace.base.append(points[0])
+        trace.effectors.append(sim.world.effector_positions())
+        trace.targets.append(sim.targets)
+        trace.skeleton.append(sim.world.skeleton)
+        trace.base.append(sim.joint_positions()[0])
         trace.angles.append(sim.joint_angles())
         trace.saturated.append(bool(np.any(info.torque_limited)))
         trace.state.append(info.solver_status)
@@ -205,7 +252,8 @@ def run_one(path: Path, solver: str, tick_rate: int | None = None) -> RunReport:
     level = load(path, tick_rate)
     spec = chain_spec(level)
     sim = ikgame.Simulation(level, solver=solver, record=False)
-    start_tip = sim.joint_positions()[-1]
+    names = list(sim.effector_names)
+    start = sim.world.effector_positions()
     wall = time.perf_counter()
     trace = _record(sim)
     wall = time.perf_counter() - wall
@@ -215,7 +263,7 @@ def run_one(path: Path, solver: str, tick_rate: int | None = None) -> RunReport:
 
     step_of = np.array(trace.step, dtype=int)
     times = np.array(trace.time)
-    tips = np.array(trace.tip).reshape(-1, 2)
+    effectors = np.array(trace.effectors).reshape(len(trace.effectors), len(names), 2)
     angles = np.array(trace.angles).reshape(len(trace.angles), -1)
     reports: list[StepReport] = []
     for outcome in result.steps:
@@ -240,51 +288,113 @@ def run_one(path: Path, solver: str, tick_rate: int | None = None) -> RunReport:
         reports.append(report)
         if ticks.size == 0 or outcome.kind == "follow":
             continue
+        step = steps[outcome.index]
+        aims = step_targets(level, step) if isinstance(step, ReachStep) else {}
+        # A reach step is measured on its effectors; a wait on every effector aimed at its end.
+        moved = [names.index(name) for name in aims] or [
+            j for j, name in enumerate(names) if name in trace.targets[ticks[-1]]
+        ]
+        moved = moved or list(range(len(names)))
         end = times[ticks[-1]]
         rest = ticks[times[ticks] >= end - REST_WINDOW_S - _EPS]
-        report.jitter_px = rest_jitter(tips[rest])
+        report.jitter_px = max(rest_jitter(effectors[rest, j]) for j in moved)
         report.jitter_limit_px = (
             SATURATED_JITTER_PX if expect in (TORQUE_BOUND, JAMMED) else JITTER_PX
         )
         if outcome.kind == "wait":
             report.spins = spin_joints(angles[ticks], SPIN_DEG)
             continue
-        step = steps[outcome.index]
         if not isinstance(step, ReachStep):
             continue
-        target = np.array(step.reach, dtype=float)
-        before = tips[ticks[0] - 1] if ticks[0] > 0 else start_tip
+        before = effectors[ticks[0] - 1] if ticks[0] > 0 else start
         if outcome.time_to_reach is not None:
             held_from = outcome.started + outcome.time_to_reach
         else:
             held_from = (outcome.started + end) / 2.0
         report.spins = spin_joints(angles[ticks[times[ticks] >= held_from - _EPS]], SPIN_DEG)
+        last = effectors[ticks[-1]]
         if expect == REACHABLE:
-            report.overshoot_pct = approach_overshoot(tips[ticks], before, target, step.tolerance)
+            overshoots = [
+                approach_overshoot(
+                    effectors[ticks, j], before[j], np.array(aims[names[j]]), step.tolerance
+                )
+                for j in moved
+            ]
+            measured = [o for o in overshoots if o is not None]
+            report.overshoot_pct = max(measured) if measured else None
         elif expect == OUT_OF_REACH:
             base = trace.base[ticks[-1]]
             report.expectation_met = (
                 not outcome.reached
                 and final_state == "failure"
-                and stretched_toward(base, tips[ticks[-1]], target, spec.reach, step.tolerance)
+                and stretched_toward(
+                    base, last[0], np.array(step.reach), spec.reach, step.tolerance
+                )
             )
         elif expect == JAMMED:
             report.expectation_met = final_state == "blocked"
         elif expect == TORQUE_BOUND:
             report.expectation_met = report.jitter_px < SATURATED_JITTER_PX
-    return _summarise(path, solver, result.status, reports, trace, angles, spec, wall)
+        elif expect == CONFLICT:
+            goal = _target_set(level, names, trace.targets[ticks[-1]])
+            at_rest = np.hypot(*(last[goal.links_order] - goal.targets.points).T)
+            optimum = kinematic_optimum(trace.skeleton[ticks[-1]], angles[ticks[-1]], goal.targets)
+            report.optimum_gap_px = float(np.abs(at_rest - optimum).max())
+            report.expectation_met = (
+                not outcome.reached
+                and report.jitter_px <= JITTER_PX
+                and report.optimum_gap_px <= CONFLICT_PX
+            )
+    return _summarise(path, solver, result, reports, trace, angles, spec, wall)
+
+
+@dataclass(frozen=True)
+class _Aimed:
+    """The targets of a tree at one tick, and where its effectors are among them."""
+
+    targets: TargetSet
+    links_order: np.ndarray
+    """Each target's effector, as an index into the level's effectors."""
+
+
+def _target_set(level: Level, names: list[str], targets: dict[str, np.ndarray]) -> _Aimed:
+    """Every aimed effector's target, weighted as the level weights it, in effector order."""
+    chain = level.chain
+    order = np.array([j for j, name in enumerate(names) if name in targets])
+    links = np.array(chain.effector_links)[order]
+    return _Aimed(
+        TargetSet(
+            links,
+            [targets[names[j]] for j in order],
+            [chain.expanded_links[link].weight for link in links],
+        ),
+        order,
+    )
+
+
+def kinematic_optimum(
+    skeleton: Skeleton, angles: np.ndarray, targets: TargetSet, rounds: int = 20
+) -> np.ndarray:
+    """(k,) each target's error, px, at the weighted least-squares optimum nearest ``angles``:
+    the multi-target damped least squares (with restarts), solved again from its own answer."""
+    robust = RobustSolver(skeleton, "dls")
+    for _ in range(rounds):
+        angles = robust.solve_targets(angles, targets, max_iterations=50, tolerance=0.5).angles
+    errors = robust.solve_targets(angles, targets, max_iterations=50, tolerance=0.5).errors
+    return np.asarray(errors, dtype=float)
 
 
 def _summarise(
     path: Path,
     solver: str,
-    status: str,
+    result: ikgame.RunResult,
     reports: list[StepReport],
     trace: _Trace,
     angles: np.ndarray,
     spec: ChainSpec,
     wall: float,
 ) -> RunReport:
+    status = result.status
     scored = [r for r in reports if r.expect == REACHABLE or r.kind == "follow"]
     reached = sum(r.passed for r in scored)
     times = [r.time_to_reach for r in reports if r.expect == REACHABLE and r.passed]
@@ -306,6 +416,12 @@ def _summarise(
         "expect": all(r.expectation_met for r in special),
         "states": false_success == 0,
     }
+    footing = result.footing
+    if footing:
+        checks["footing"] = all(
+            leg["steps"] > 0 and leg["slip"] <= SLIP_PX and leg["sink"] <= SINK_PX
+            for leg in footing.values()
+        )
     return RunReport(
         level=path.name,
         solver=solver,
@@ -325,6 +441,7 @@ def _summarise(
         checks=checks,
         wall_s=wall,
         steps=reports,
+        footing=footing,
     )
 
 
@@ -342,6 +459,14 @@ _COLUMNS: Final = (
     ("fail/jam", "right"),
     ("run", "left"),
 )
+_FOOTING_COLUMN: Final = ("slip/sink px", "right")
+"""Shown before ``run`` when a creature is in the table."""
+
+
+def _columns(reports: list[RunReport]) -> tuple[tuple[str, str], ...]:
+    if not any(r.footing for r in reports):
+        return _COLUMNS
+    return (*_COLUMNS[:-1], _FOOTING_COLUMN, _COLUMNS[-1])
 
 
 def _number(value: float | None, fmt: str) -> str:
@@ -356,25 +481,29 @@ def table_rows(reports: list[RunReport]) -> list[list[tuple[str, bool | None]]]:
     """Each run as the cells of the table: (text, passes its threshold or None if not judged)."""
     rows = []
     previous = None
+    creatures = any(r.footing for r in reports)
     for r in reports:
         c = r.checks
         special = (f"{r.special_met}/{r.special_total}", c["expect"]) if r.special_total else None
-        rows.append(
-            [
-                ("" if r.level == previous else Path(r.level).stem, None),
-                (r.solver, None),
-                (f"{r.reached}/{r.reachable}", c["reached"]),
-                (_number(r.mean_time_to_reach, ".2f"), None),
-                (_number(r.overshoot_pct, ".1f"), c["overshoot"]),
-                (_number(r.jitter_px, ".2f"), c["jitter"]),
-                (f"{r.limit_excursion_deg:.1f}", c["limits"]),
-                (str(r.spins), c["spins"]),
-                (f"{100.0 * r.saturated_share:.0f}", None),
-                (_states(r.states), c["states"]),
-                special or ("-", None),
-                ("pass" if r.passed else "FAIL", r.passed),
-            ]
-        )
+        row = [
+            ("" if r.level == previous else Path(r.level).stem, None),
+            (r.solver, None),
+            (f"{r.reached}/{r.reachable}", c["reached"]),
+            (_number(r.mean_time_to_reach, ".2f"), None),
+            (_number(r.overshoot_pct, ".1f"), c["overshoot"]),
+            (_number(r.jitter_px, ".2f"), c["jitter"]),
+            (f"{r.limit_excursion_deg:.1f}", c["limits"]),
+            (str(r.spins), c["spins"]),
+            (f"{100.0 * r.saturated_share:.0f}", None),
+            (_states(r.states), c["states"]),
+            special or ("-", None),
+        ]
+        if creatures:
+            row.append(
+                (f"{r.slip_px:.2f}/{r.sink_px:.2f}", c["footing"]) if r.footing else ("-", None)
+            )
+        row.append(("pass" if r.passed else "FAIL", r.passed))
+        rows.append(row)
         previous = r.level
     return rows
 
@@ -391,20 +520,35 @@ def summary(reports: list[RunReport]) -> str:
     )
 
 
-LEGEND: Final = (
-    "states: the solver state each step ended in (s success, p processing, f failure, "
-    "b blocked); fail/jam: unreachable or jammed steps that ended as they should; x: fails "
-    f"its threshold (overshoot <= {OVERSHOOT_PCT:g}%, jitter <= {JITTER_PX:g} px, "
-    f"< {SATURATED_JITTER_PX:g} px torque-bound or jammed, limit <= {LIMIT_DEG:g} deg, "
-    "no spin, no unreached step ending in success)"
-)
+def legend(reports: list[RunReport]) -> str:
+    """What the letters, the fail/jam column and the marks mean (and the footing, with a
+    creature in the table)."""
+    conflicts = any(s.expect == CONFLICT for r in reports for s in r.steps)
+    special = (
+        "unreachable, jammed or conflicting steps" if conflicts else "unreachable or jammed steps"
+    )
+    text = (
+        "states: the solver state each step ended in (s success, p processing, f failure, "
+        f"b blocked); fail/jam: {special} that ended as they should; x: fails "
+        f"its threshold (overshoot <= {OVERSHOOT_PCT:g}%, jitter <= {JITTER_PX:g} px, "
+        f"< {SATURATED_JITTER_PX:g} px torque-bound or jammed, limit <= {LIMIT_DEG:g} deg, "
+        "no spin, no unreached step ending in success"
+    )
+    if conflicts:
+        text += f", conflict at rest within {CONFLICT_PX:g} px of the optimum's errors"
+    if any(r.footing for r in reports):
+        text += (
+            f", every foot steps and slips <= {SLIP_PX:g} px and sinks <= {SINK_PX:g} px; "
+            "slip/sink: the farthest a planted foot slid and the deepest a foot sank"
+        )
+    return text + ")"
 
 
 def render(reports: list[RunReport], console: Console, *, tick_rate: int | None) -> None:
     """Print the table of stress level x solver, with each run's wall time, and the counts."""
     rate = "the levels' own tick rate" if tick_rate is None else f"{tick_rate} ticks/s"
     table = Table(title=f"Motion quality in the physics world ({rate})", title_justify="left")
-    for name, justify in (*_COLUMNS, ("wall s", "right")):
+    for name, justify in (*_columns(reports), ("wall s", "right")):
         table.add_column(name, justify=justify, no_wrap=True)
     for report, row in zip(reports, table_rows(reports), strict=True):
         cells = [
@@ -414,20 +558,21 @@ def render(reports: list[RunReport], console: Console, *, tick_rate: int | None)
         table.add_row(*cells, f"{report.wall_s:.1f}")
     console.print(table)
     console.print(summary(reports))
-    console.print(LEGEND)
+    console.print(legend(reports))
 
 
 def markdown(reports: list[RunReport]) -> str:
     """The table as Markdown, without wall times, so it is the same on every run."""
     align = {"left": ":---", "right": "---:"}
+    columns = _columns(reports)
     lines = [
-        "| " + " | ".join(name for name, _ in _COLUMNS) + " |",
-        "|" + "|".join(align[justify] for _, justify in _COLUMNS) + "|",
+        "| " + " | ".join(name for name, _ in columns) + " |",
+        "|" + "|".join(align[justify] for _, justify in columns) + "|",
     ]
     for row in table_rows(reports):
         cells = [text if ok is not False else f"{text} x" for text, ok in row]
         lines.append("| " + " | ".join(cells) + " |")
-    return "\n".join(lines) + "\n\n" + summary(reports) + "\n\n" + LEGEND + "\n"
+    return "\n".join(lines) + "\n\n" + summary(reports) + "\n\n" + legend(reports) + "\n"
 
 
 def _job(args: tuple[str, str, int | None]) -> RunReport:

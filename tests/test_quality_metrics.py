@@ -8,6 +8,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
 metrics = importlib.import_module("_quality_metrics")
@@ -102,18 +103,20 @@ def _spec(n: int = 4) -> object:
     )
 
 
-def test_gravity_torque_is_the_slope_of_the_potential_energy():
-    spec = _spec()
-    pose = np.random.default_rng(4).uniform(-2.0, 2.0, 4)
+@pytest.mark.parametrize("shape", ["chain", "tree"])
+def test_gravity_torque_is_the_slope_of_the_potential_energy(shape):
+    spec = _spec() if shape == "chain" else _fork()
+    n = len(spec.lengths)
+    pose = np.random.default_rng(4).uniform(-2.0, 2.0, n)
 
     def energy(angles: np.ndarray) -> float:
-        points = metrics.chain_points(spec, angles)
-        com = (points[:-1] + points[1:]) / 2.0
+        starts, ends = metrics.link_segments(spec, angles)
+        com = (starts + ends) / 2.0
         return float(-(spec.masses[:, None] * com * spec.gravity).sum())
 
     h = 1e-6
-    slope = [(energy(pose + h * e) - energy(pose - h * e)) / (2 * h) for e in np.eye(4)]
-    torques = metrics.gravity_torques(spec, metrics.chain_points(spec, pose))
+    slope = [(energy(pose + h * e) - energy(pose - h * e)) / (2 * h) for e in np.eye(n)]
+    torques = metrics.gravity_torques(spec, *metrics.link_segments(spec, pose))
     np.testing.assert_allclose(torques, np.abs(slope), rtol=1e-5, atol=1e-3)
 
 
@@ -121,13 +124,13 @@ def test_clearance_sees_a_link_crossing_an_obstacle():
     spec = dataclasses.replace(
         _spec(1), base=np.zeros(2), base_angle=0.0, lengths=np.array([100.0])
     )
-    points = metrics.chain_points(spec, np.zeros(1))
+    links = metrics.link_segments(spec, np.zeros(1))
     wall = dataclasses.replace(spec, segments=np.array([[50.0, -40.0, 50.0, 40.0, 2.0]]))
-    assert metrics.obstacle_clearance(wall, points) < 0.0
+    assert metrics.obstacle_clearance(wall, *links) < 0.0
     beside = dataclasses.replace(spec, segments=np.array([[0.0, 20.0, 100.0, 20.0, 2.0]]))
-    assert abs(metrics.obstacle_clearance(beside, points) - 13.0) < 1e-9
+    assert abs(metrics.obstacle_clearance(beside, *links) - 13.0) < 1e-9
     disc = dataclasses.replace(spec, circles=np.array([[120.0, 0.0, 10.0]]))
-    assert abs(metrics.obstacle_clearance(disc, points) - 5.0) < 1e-9
+    assert abs(metrics.obstacle_clearance(disc, *links) - 5.0) < 1e-9
 
 
 def test_a_witness_respects_limits_torque_and_obstacles():
@@ -142,3 +145,59 @@ def test_a_witness_respects_limits_torque_and_obstacles():
     assert metrics.find_witness(spec, behind, 4.0) is None
     weak = dataclasses.replace(spec, gravity=np.array([0.0, -900.0]), max_torque=np.full(3, 1.0))
     assert metrics.find_witness(weak, reachable, 4.0) is None
+
+
+def _fork() -> object:
+    """A trunk of 60 px straight up with two arms of two links each on its tip, under
+    gravity, every joint free."""
+    n = 5
+    return dataclasses.replace(
+        _spec(n),
+        lengths=np.array([60.0, 50.0, 40.0, 50.0, 40.0]),
+        base=np.zeros(2),
+        base_angle=math.pi / 2,
+        parents=np.array([-1, 0, 1, 0, 3]),
+    )
+
+
+def test_a_tree_hangs_each_link_from_its_parents_end():
+    spec = _fork()
+    pose = np.random.default_rng(5).uniform(-2.0, 2.0, 5)
+    starts, ends = metrics.link_segments(spec, pose)
+    np.testing.assert_allclose(starts[[1, 3]], [ends[0], ends[0]])
+    np.testing.assert_allclose(starts[[2, 4]], [ends[1], ends[3]])
+    # Each arm is a chain hanging from the trunk's tip.
+    arm = dataclasses.replace(spec, lengths=spec.lengths[[0, 3, 4]], parents=None)
+    np.testing.assert_allclose(metrics.chain_points(arm, pose[[0, 3, 4]])[-1], ends[4])
+    # A root off the base sits at its offset in the base frame (x up, y to the left here).
+    offsets = np.zeros((5, 2))
+    offsets[2] = (0.0, 30.0)
+    legs = dataclasses.replace(spec, parents=np.array([-1, 0, -1, 2, 3]), offsets=offsets)
+    np.testing.assert_allclose(metrics.link_segments(legs, pose)[0][2], [-30.0, 0.0], atol=1e-9)
+
+
+def test_two_hands_are_never_farther_apart_than_their_span():
+    spec = _fork()
+    assert metrics.span(spec, 2, 4) == 180.0
+    assert metrics.span(spec, 1, 4) == 140.0
+    poses = np.random.default_rng(7).uniform(-np.pi, np.pi, (500, 5))
+    apart = [np.hypot(*np.subtract(*metrics.link_segments(spec, p)[1][[2, 4]])) for p in poses]
+    assert max(apart) <= 180.0
+    # The arms stretched out to either side meet it.
+    wide = np.array([0.0, np.pi / 2, 0.0, -np.pi / 2, 0.0])
+    ends = metrics.link_segments(spec, wide)[1]
+    assert np.hypot(*(ends[2] - ends[4])) == pytest.approx(180.0)
+
+
+def test_a_witness_meets_several_targets_at_once_or_none_is_found():
+    spec = dataclasses.replace(_fork(), max_torque=np.full(5, 1e7))
+    pose = np.array([0.3, 1.0, 0.4, -1.2, -0.5])
+    ends = metrics.link_segments(spec, pose)[1]
+    found = metrics.find_witness(spec, ends[[2, 4]], 4.0, links=[2, 4])
+    assert found is not None
+    reached = metrics.link_segments(spec, found)[1][[2, 4]]
+    assert np.hypot(*(reached - ends[[2, 4]]).T).max() <= 2.0
+    # Each of two points 190 px apart alone, but not both: the hands span 180 px at most.
+    apart = np.array([[-95.0, 60.0], [95.0, 60.0]])
+    assert metrics.find_witness(spec, apart[0], 4.0, links=[2]) is not None
+    assert metrics.find_witness(spec, apart, 4.0, links=[2, 4]) is None
