@@ -624,7 +624,7 @@ def _gait(level: Level, world: World, scene: Scene) -> tuple[Gait | None, Footin
         ground,
         position=skeleton.base,
         angle=skeleton.base_angle,
-        groups=config.groups,
+        groups=config.step_groups,
         reach=max(float(spare.min()), 1.0),
     )
     return gait, Footing(config.legs, ground, settle=max(level.chain.arrival, 1.0))

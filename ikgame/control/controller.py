@@ -156,8 +156,9 @@ class Controller:
         pseudo-inverse of the stacked Jacobian), so the chain moves with its targets, and holds
         a still target while its base is carried, instead of lagging behind; the servo only
         closes the error on top. Rates beyond a joint's speed limit are scaled down together,
-        keeping the direction. Rates over ``JUMP`` times the limit mean a target jumped (a new
-        reach step): a new goal to brake toward, not a motion to follow.
+        keeping the direction (per branch on the base, for a tree of several). Rates over
+        ``JUMP`` times the limit mean a target jumped (a new reach step): a new goal to brake
+        toward, not a motion to follow.
         """
         previous, self._last_target = self._last_target, target
         if target is None or previous is None:
@@ -203,10 +204,20 @@ class Controller:
             velocity = velocity.reshape(-1)
             eye = np.eye(len(velocity))
             rates = arms.T @ np.linalg.solve(arms @ arms.T + damping * eye, velocity)
-        over = float(np.max(np.abs(rates) / self.max_speed))
-        if over > JUMP:
-            return None
-        return rates / max(over, 1.0)
+        over = np.abs(rates) / self.max_speed
+        roots = skeleton.roots
+        if not roots.any():
+            worst = float(np.max(over))
+            if worst > JUMP:
+                return None
+            return rates / max(worst, 1.0)
+        # Branches on the base move independently (a creature's legs): each is scaled on its
+        # own, so a swinging leg at its speed limit does not slow the planted ones, and a leg
+        # whose target jumped gets no rates while the others keep theirs.
+        worst = np.zeros(skeleton.count)
+        np.maximum.at(worst, roots, over)
+        per_link = worst[roots]
+        return np.where(per_link > JUMP, 0.0, rates / np.maximum(per_link, 1.0))
 
     def hold(self, measured: np.ndarray) -> None:
         """Stop pushing: hold the ``measured`` pose (radians) instead of solving, until

@@ -26,6 +26,9 @@ __all__ = ["FootState", "Footing", "Gait", "GaitParams", "Terrain", "default_gro
 PATH_SAMPLES: Final = 64
 """Points along a step's path checked against the terrain when the step is planned."""
 
+SINK_DEPTH: Final = 10.0
+"""How deep below the ground (px) :class:`Footing` can see a foot sink."""
+
 STILL: Final = 1e-6
 """A rest spot moving slower than this sideways (px/s) is standing still."""
 
@@ -451,7 +454,7 @@ class Footing:
     that never gets there is down from the start). ``landing`` is its largest distance from the
     spot on the gait's landing tick, ``slip`` its largest distance from where it came down while
     it stays planted, and ``sink`` how far its tip's centre went below the ``ground`` it stands
-    on (the terrain grown by the foot's radius).
+    on (the terrain grown by the foot's radius; up to :data:`SINK_DEPTH`).
 
     >>> ground = Terrain(segments=[[-100.0, 0.0, 100.0, 0.0, 0.0]])
     >>> footing = Footing(("a",), ground, settle=1.0)
@@ -476,7 +479,9 @@ class Footing:
     def observe(self, feet: Mapping[str, FootState], positions: Mapping[str, np.ndarray]) -> None:
         """One tick: each foot's phase from the gait and where the foot really is (px)."""
         at = np.array([positions[leg] for leg in self._legs], dtype=float)
-        grounds = self._ground.heights(at[:, 0], at[:, 1] + 1e4)
+        # Rays from a little above each foot: from higher up, the top of a wall the foot stands
+        # beside would read as ground it sank into.
+        grounds = self._ground.heights(at[:, 0], at[:, 1] + SINK_DEPTH)
         for j, leg in enumerate(self._legs):
             where = at[j]
             if not math.isnan(grounds[j]):

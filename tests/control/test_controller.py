@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from ikgame.control.controller import Controller, joint_error
-from ikgame.kinematics import Skeleton, forward_kinematics
+from ikgame.kinematics import Skeleton, TargetSet, forward_kinematics
 from ikgame.kinematics.clearance import Avoider, Clearance, Obstacles
 
 
@@ -71,3 +71,31 @@ def test_with_an_avoider_the_chain_goes_under_the_shelf_without_touching_it(solv
             pose = pose + ctl.command(pose, np.array(target)).rates * dt
             assert room.gaps(pose).min() > -0.5
         assert np.hypot(*(room.points(pose)[-1] - target)) <= 1.0
+
+
+def test_branches_on_the_base_follow_their_targets_each_at_its_own_speed():
+    # Two legs hang from a body that moves: the first leg's foot holds still, the second's
+    # target sweeps away faster than its joints can turn. Only the second leg's rates are
+    # scaled down to its speed limit; the planted leg keeps the rates that hold its foot.
+    legs = Skeleton.tree(
+        [50.0, 50.0, 50.0, 50.0],
+        [-1, 0, -1, 2],
+        base=(0.0, 100.0),
+        root_offsets=[(-40.0, 0.0), (0.0, 0.0), (40.0, 0.0), (0.0, 0.0)],
+    )
+    angles = np.array([-2.0, 0.8, -1.2, -0.8])
+    controller = Controller(legs, "dls", max_speed=np.full(4, 3.0))
+    points, _ = forward_kinematics(legs, angles)
+    feet = points[4 + np.array([1, 3])]
+    before = TargetSet([1, 3], feet)
+    carried = (np.array([60.0, 0.0]), 0.0)
+    dt = 1 / 240
+    alone = Controller(legs, "dls", max_speed=np.full(4, 3.0))
+    alone._goal_rates(angles, TargetSet([1], feet[:1]), dt, carried)
+    planted = alone._goal_rates(angles, TargetSet([1], feet[:1]), dt, carried)
+    for sweep, fastest in ((2.0, 3.0), (20.0, 0.0)):  # px a tick: fast, then a jump
+        controller._goal_rates(angles, before, dt, carried)
+        after = TargetSet([1, 3], feet + [(0.0, 0.0), (sweep, 0.0)])
+        rates = controller._goal_rates(angles, after, dt, carried)
+        assert rates[:2] == pytest.approx(planted[:2], rel=1e-3)
+        assert np.abs(rates[2:]).max() == pytest.approx(fastest)
