@@ -183,8 +183,9 @@ class Simulation:
         self._effector_weights = np.array(
             [chain.expanded_links[i].weight for i in chain.effector_links], dtype=float
         )
-        # A chain keeps aiming its tip at a point; anything else aims a set of named targets.
-        self._multi = self.effector_names != (CHAIN_EFFECTOR,)
+        # A chain of links aims its tip at a point; a tree of bones aims a set of named targets
+        # (even a single one: its root may sit off the base, which the chain solvers refuse).
+        self._multi = self.world.is_tree
         self.script = ScriptRunner(level.script, effectors=level.script_effectors)
         self.goals = GoalTracker(level.goals, [p.name for p in level.props])
         self.dt = 1.0 / level.world.tick_rate

@@ -98,3 +98,20 @@ def test_tick_info_and_snapshots_carry_every_effector():
     assert sim.scene.effector_names == ("left_hand", "right_hand")
     assert [len(t) for t in sim.scene.effector_targets] == [4, 3]
     assert np.all(np.isfinite(snap.errors))
+
+
+def test_a_single_bone_named_tip_off_the_base_is_still_a_tree():
+    from ikgame.level.model import Level
+
+    level = Level.model_validate(
+        {
+            "level": {"name": "one bone", "duration": 3.0},
+            "world": {"gravity": [0.0, 0.0]},
+            "chain": {
+                "angle": 0.0,
+                "bones": [{"name": "tip", "at": [20.0, 0.0], "angle": 90.0, "length": 60.0}],
+            },
+            "script": [{"reach": [50.0, 51.96]}],
+        }
+    )
+    assert Simulation(level, record=False).run().status == "passed"
