@@ -204,16 +204,11 @@ class Controller:
             velocity = velocity.reshape(-1)
             eye = np.eye(len(velocity))
             rates = arms.T @ np.linalg.solve(arms @ arms.T + damping * eye, velocity)
+        # Branches on the base move independently (a creature's legs; a chain is one branch):
+        # each is scaled on its own, so a swinging leg at its speed limit does not slow the
+        # planted ones, and a leg whose target jumped gets no rates while the others keep theirs.
         over = np.abs(rates) / self.max_speed
         roots = skeleton.roots
-        if not roots.any():
-            worst = float(np.max(over))
-            if worst > JUMP:
-                return None
-            return rates / max(worst, 1.0)
-        # Branches on the base move independently (a creature's legs): each is scaled on its
-        # own, so a swinging leg at its speed limit does not slow the planted ones, and a leg
-        # whose target jumped gets no rates while the others keep theirs.
         worst = np.zeros(skeleton.count)
         np.maximum.at(worst, roots, over)
         per_link = worst[roots]
