@@ -217,7 +217,7 @@ class Simulation:
         self.gait, self._footing = _gait(level, self.world, self.scene)
         """The creature's :class:`~ikgame.control.gait.Gait` when the level has a ``[gait]``."""
         self._gait_targets: dict[str, np.ndarray] = {}
-        self._effector = self.world.end_effector()
+        self._reached = self.world.effector_positions()
         if self._has_goals:
             self.goals.observe(0.0, self.world.prop_states())
 
@@ -305,17 +305,13 @@ class Simulation:
             return self._last
         finished = len(self.script.outcomes)
         if self._multi:
-            reached = self.world.effector_positions()
-            self.script.observe(
-                self.time, self.dt, dict(zip(self.effector_names, reached, strict=True))
-            )
+            reached = dict(zip(self.effector_names, self._reached, strict=True))
+            self.script.observe(self.time, self.dt, reached)
+            if self.gait is not None:
+                self._footing.observe(self.gait.feet, reached)
         else:
-            self.script.observe(self.time, self.dt, self._effector)
+            self.script.observe(self.time, self.dt, self._reached[0])
         self._note_blocked(finished)
-        if self.gait is not None:
-            self._footing.observe(
-                self.gait.feet, dict(zip(self.effector_names, reached, strict=True))
-            )
         if self._has_goals:
             self.goals.observe(self.time, self.world.prop_states())
         self._last = info
@@ -363,9 +359,10 @@ class Simulation:
         if self.world.skeleton is not self.controller.skeleton:
             # The base moved: the solver must work from where it is now.
             self.controller.skeleton = self.world.skeleton
-        self._effector = self.world.end_effector()
+        # Where every effector ended the tick, read once for the errors and the script.
+        self._reached = self.world.effector_positions()
         errors = self._errors(target)
-        error = float(np.max(errors)) if target is not None else math.nan
+        error = math.nan if target is None else float(np.nanmax(errors))
         limited = self.world.torque_limited()
         status = command.solution.status.value
         if target is not None and self._blocked_target is None:
@@ -392,7 +389,7 @@ class Simulation:
             command.solution.iterations,
             error,
             limited,
-            self._all_errors(target, errors),
+            errors,
         )
 
     def _goal(self) -> np.ndarray | TargetSet | None:
@@ -411,23 +408,15 @@ class Simulation:
         )
 
     def _errors(self, target: np.ndarray | TargetSet | None) -> np.ndarray:
-        """Each aimed effector's distance to its target after the tick, px."""
-        if target is None:
-            return np.zeros(0)
+        """(k,) each effector's distance to its target after the tick, px; nan for an effector
+        without one."""
+        errors = np.full(len(self.effector_names), math.nan)
         if isinstance(target, TargetSet):
-            reached = self.world.link_ends(target.links)
-            return np.hypot(*(reached - target.points).T)
-        return np.array([np.hypot(*(self._effector - target))])
-
-    def _all_errors(self, target: np.ndarray | TargetSet | None, errors: np.ndarray) -> np.ndarray:
-        """(k,) every effector's error, nan for those without a target."""
-        if target is None:
-            return np.full(len(self.effector_names), math.nan)
-        if not isinstance(target, TargetSet):
-            return errors
-        out = np.full(len(self.effector_names), math.nan)
-        out[np.searchsorted(self._effector_links, target.links)] = errors
-        return out
+            aimed = np.searchsorted(self._effector_links, target.links)
+            errors[aimed] = np.hypot(*(self._reached[aimed] - target.points).T)
+        elif target is not None:
+            errors[0] = np.hypot(*(self._reached[0] - target))
+        return errors
 
     def _note_blocked(self, finished: int) -> None:
         """Mark the steps that ended while the chain was blocked, in their outcome's note."""
