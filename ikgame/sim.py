@@ -507,8 +507,6 @@ class Simulation:
         """The state now, as plain arrays."""
         joints = self.world.joint_positions()
         angles = self.world.joint_angles()
-        skeleton = self.world.skeleton
-        path = np.cumsum(angles) if skeleton.is_chain else skeleton.ancestors @ angles
         if self.world.is_tree:
             targets = self.targets
             aims = np.array(
@@ -523,7 +521,7 @@ class Simulation:
             tick=self.tick,
             joints=joints,
             angles=angles,
-            world_angles=path + skeleton.base_angle,
+            world_angles=self.world.skeleton.world_angles(angles),
             target=None if target is None else target.copy(),
             step_index=self.script.step_index,
             error=self._last.error,

@@ -279,12 +279,9 @@ class Controller:
         if moved:
             # The goal may be within the torque budget now: stalled joints try again.
             self.servo.retry()
-        skeleton = self.skeleton
-        path = np.cumsum(measured) if skeleton.is_chain else skeleton.ancestors @ measured
-        world_angles = path + skeleton.base_angle
         drive = self.servo.command(
             error,
-            world_angles,
+            self.skeleton.world_angles(measured),
             velocities,
             gravity,
             dt,

@@ -324,6 +324,16 @@ class Skeleton:
             object.__setattr__(moved, "base_angle", float(angle))
         return moved
 
+    def world_angles(self, angles: np.ndarray) -> np.ndarray:
+        """(n,) world angle of each link for local joint ``angles``, radians: each joint's angle
+        summed with its ancestors' and the base's.
+
+        >>> Skeleton.tree([1, 1, 1], [-1, 0, 0]).world_angles(np.array([0.5, 0.25, -0.5])).tolist()
+        [0.5, 0.75, 0.0]
+        """
+        path = np.cumsum(angles) if self.is_chain else self.ancestors @ angles
+        return path + self.base_angle
+
     def clamp(self, angles: np.ndarray) -> np.ndarray:
         """Angles clipped to the joint limits, radians.
 
