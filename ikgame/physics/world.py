@@ -234,11 +234,6 @@ class World:
         state, rows = self._state()
         return state[rows.links, 2] - state[rows.parents, 2]
 
-    def link_angles(self) -> np.ndarray:
-        """(n,) world angle of each link, radians (continuous, not wrapped)."""
-        state, rows = self._state()
-        return state[rows.links, 2]
-
     @property
     def gravity(self) -> np.ndarray:
         """(2,) gravity now, px/s^2."""
