@@ -183,9 +183,6 @@ class Simulation:
         self._effector_weights = np.array(
             [chain.expanded_links[i].weight for i in chain.effector_links], dtype=float
         )
-        # A chain of links aims its tip at a point; a tree of bones aims a set of named targets
-        # (even a single one: its root may sit off the base, which the chain solvers refuse).
-        self._multi = self.world.is_tree
         self.script = ScriptRunner(level.script, effectors=level.script_effectors)
         self.goals = GoalTracker(level.goals, [p.name for p in level.props])
         self.dt = 1.0 / level.world.tick_rate
@@ -304,7 +301,7 @@ class Simulation:
         if info is None:
             return self._last
         finished = len(self.script.outcomes)
-        if self._multi:
+        if self.world.is_tree:
             reached = dict(zip(self.effector_names, self._reached, strict=True))
             self.script.observe(self.time, self.dt, reached)
             if self.gait is not None:
@@ -396,7 +393,9 @@ class Simulation:
         """What the controller aims at this tick: the tip's point for a chain, else the set of
         every targeted effector (in link order, with its weight)."""
         targets = self.targets
-        if not self._multi:
+        if not self.world.is_tree:
+            # A chain aims its tip at a point. A tree aims a set of targets, even a single one
+            # (its root may sit off the base, which the chain solvers refuse).
             return targets.get(CHAIN_EFFECTOR)
         aimed = [j for j, name in enumerate(self.effector_names) if name in targets]
         if not aimed:
