@@ -590,13 +590,13 @@ def _gait(level: Level, world: World, scene: Scene) -> tuple[Gait | None, Footin
     links = [level.chain.effector_links[names.index(leg)] for leg in config.legs]
     skeleton = world.skeleton
     c, s = math.cos(skeleton.base_angle), math.sin(skeleton.base_angle)
-    relative = world.link_ends(np.array(links)) - skeleton.base
-    rest = relative @ np.array(((c, -s), (s, c)))
+    feet = world.link_ends(np.array(links))
+    rest = (feet - skeleton.base) @ np.array(((c, -s), (s, c)))
     # How far below its rest spot each foot can reach: its leg stretched, less the way from the
     # hip to the rest spot.
     hips = skeleton.root_points()[links]
     lengths = skeleton.ancestors[links] @ skeleton.lengths
-    spare = lengths - np.hypot(*(world.link_ends(np.array(links)) - hips).T)
+    spare = lengths - np.hypot(*(feet - hips).T)
     # A foot's end is the centre of its round tip: it stands its radius above the ground.
     radius = float(world.link_widths[links].max()) / 2
     ground = Terrain(*_grown(scene.segments, scene.circles, radius))
@@ -605,7 +605,7 @@ def _gait(level: Level, world: World, scene: Scene) -> tuple[Gait | None, Footin
             stride=config.stride,
             step_height=config.step_height,
             step_time=config.step_time,
-            threshold=config.stride / 2 if config.threshold is None else config.threshold,
+            threshold=config.step_threshold,
         ),
         dict(zip(config.legs, rest, strict=True)),
         ground,
