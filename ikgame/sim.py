@@ -206,7 +206,7 @@ class Simulation:
         )
         self._result: RunResult | None = None
         self.scene = _scene(level, self.world, self.script)
-        self.controller.avoider = _avoider(self.world, self.scene)
+        self.controller.avoider = _avoider(level, self.world, self.scene)
         self._has_goals = bool(level.goals)
         self._watch = BlockWatch(dt=self.dt, arrival=level.chain.arrival)
         self._blocked_target: np.ndarray | TargetSet | None = None
@@ -625,10 +625,10 @@ def _grown(segments: np.ndarray, circles: np.ndarray, by: float) -> tuple[np.nda
     return grown_segments, grown_circles
 
 
-def _avoider(world: World, scene: Scene) -> Avoider | None:
-    """What keeps the chain clear of the level's static obstacles (None without any, and for
-    a tree: the clearance works on chains)."""
-    if not world.skeleton.is_chain:
+def _avoider(level: Level, world: World, scene: Scene) -> Avoider | None:
+    """What keeps the skeleton clear of the level's static obstacles (None without any, and for
+    a creature with a gait: its feet stand on the ground by design)."""
+    if level.gait is not None:
         return None
     obstacles = Obstacles.from_arrays(scene.segments, scene.circles)
     if not len(obstacles):
