@@ -613,6 +613,15 @@ class Avoider:
             return solution
         if self._goal is not None:
             if not self._arrived(measured, target):
+                if self._clear_way(measured, self._way[0]):
+                    return self._follow(measured, solution)
+                # The motors left the planned line (joints at their speed or torque limits at
+                # different times) and the way on from here is blocked: plan again from here.
+                way = room.route(measured, self._goal)
+                if way is None:
+                    self._given_up = key
+                    return solution
+                self._way = way
                 return self._follow(measured, solution)
             self.reset()
         if self._far_enough(measured, solution.angles):
