@@ -633,7 +633,10 @@ def _avoider(level: Level, world: World, scene: Scene) -> Avoider | None:
     obstacles = Obstacles.from_arrays(scene.segments, scene.circles)
     if not len(obstacles):
         return None
-    return Avoider(Clearance(world.skeleton, world.link_widths / 2.0, obstacles))
+    # A tree re-plans when its motors leave the planned line (its arms swing through a floor
+    # beside the torso); chains keep the plans their levels were tuned with.
+    room = Clearance(world.skeleton, world.link_widths / 2.0, obstacles)
+    return Avoider(room, replan=world.is_tree)
 
 
 def _scene(level: Level, world: World, script: ScriptRunner) -> Scene:

@@ -562,7 +562,9 @@ class Avoider:
     the route are kept until the target moves, so they are searched once (a chain resting short
     of the target for ``RELEASE_CALLS`` calls is handed back to the solver). When no clear
     answer or no route is found, the solver's own solution is returned for that target: the
-    chain behaves as without obstacles (and a jammed one is reported blocked).
+    chain behaves as without obstacles (and a jammed one is reported blocked). With ``replan``,
+    a chain the motors carried off the planned line, whose straight way on to its via pose is
+    blocked from where it is, gets a new route from there.
 
     >>> arm = Skeleton.chain([100.0, 100.0], base_angle=math.pi / 2)
     >>> shelf = Obstacles.from_arrays(np.array([[-50.0, 150.0, 50.0, 150.0, 0.0]]), np.empty((0, 3)))
@@ -573,8 +575,10 @@ class Avoider:
     True
     """
 
-    def __init__(self, clearance: Clearance) -> None:
+    def __init__(self, clearance: Clearance, *, replan: bool = False) -> None:
         self.clearance = clearance
+        self.replan = replan
+        """Whether to route again from where the chain is when the way on is blocked."""
         self._skeleton = clearance.skeleton
         self.reset()
 
@@ -613,7 +617,7 @@ class Avoider:
             return solution
         if self._goal is not None:
             if not self._arrived(measured, target):
-                if self._clear_way(measured, self._way[0]):
+                if not self.replan or self._clear_way(measured, self._way[0]):
                     return self._follow(measured, solution)
                 # The motors left the planned line (joints at their speed or torque limits at
                 # different times) and the way on from here is blocked: plan again from here.

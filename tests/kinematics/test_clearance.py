@@ -293,3 +293,18 @@ def test_a_set_out_of_joint_reach_settles_clear_but_not_through_the_floor():
     assert np.all(room.misses(free, apart) >= room.misses(pose, apart) - 0.5)
     under_the_floor = TargetSet([4, 7], [(-110.0, -60.0), (90.0, 300.0)])
     assert room.clear_answer(RAISED, RAISED, under_the_floor, 0.5) is None
+
+
+@pytest.mark.parametrize("replan", [False, True])
+def test_with_replan_a_chain_carried_off_its_route_gets_a_new_one_from_where_it_is(replan):
+    room = _shelf_room()
+    guide = Avoider(room, replan=replan)
+    target = np.array([290.0, 45.0])
+    through = Solution(np.array([-0.3, -1.2, -0.6]), SolveStatus.SUCCESS, 10, 0.0)
+    guide.steer(np.array([0.5, 0.3, 0.2]), through, target, 0.5)
+    # Carried off the line, bent under the shelf's left end: straight on to the via pose the
+    # arm would sweep through the shelf.
+    off = np.array([-0.1, -2.03, 0.23])
+    assert room.is_clear(off)
+    command = guide.steer(off, through, target, 0.5)
+    assert room.path_clear(off, command.angles) is replan
