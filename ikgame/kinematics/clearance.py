@@ -152,14 +152,16 @@ class Clearance:
     True
 
     A tree aims a :class:`~ikgame.kinematics.targets.TargetSet`; its links start at their
-    parents' ends:
+    parents' ends (here two arms on a torso, both up through the shelf, sent out sideways):
 
     >>> arms = Skeleton.tree([100.0, 80.0, 80.0], [-1, 0, 0], base_angle=math.pi / 2)
     >>> room = Clearance(arms, np.full(3, 5.0), shelf)
-    >>> aim = TargetSet([1, 2], [(-60.0, 120.0), (60.0, 120.0)])
-    >>> pose = room.polish(np.zeros(3), aim).angles
-    >>> room.is_clear(pose), round(room.miss(pose, aim), 1)
-    (True, 0.0)
+    >>> room.gaps(np.zeros(3)).tolist()
+    [45.0, -35.0, -35.0]
+    >>> aim = TargetSet([1, 2], [(-80.0, 100.0), (80.0, 100.0)])
+    >>> sol = room.polish(np.zeros(3), aim)
+    >>> sol.status.name, room.is_clear(sol.angles), bool(room.misses(sol.angles, aim).max() <= 0.5)
+    ('SUCCESS', True, True)
     """
 
     def __init__(

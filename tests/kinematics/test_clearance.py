@@ -39,6 +39,24 @@ def _sampled_gaps(room: Clearance, angles: np.ndarray) -> np.ndarray:
     return np.array(gaps)
 
 
+def _move_as_told(
+    guide: Avoider,
+    measured: np.ndarray,
+    answer: Solution,
+    target: np.ndarray | TargetSet,
+    ticks: int,
+) -> np.ndarray:
+    """The pose after following the avoider's commands for ``ticks`` ticks as a skeleton with
+    ideal motors would (straight in joint space, 0.05 rad a tick at most), each command
+    checked to be a clear straight line from where the skeleton is."""
+    for _ in range(ticks):
+        command = guide.steer(measured, answer, target, 0.5)
+        assert guide.clearance.path_clear(measured, command.angles)
+        step = command.angles - measured
+        measured = measured + step * min(1.0, 0.05 / max(np.abs(step).max(), 1e-12))
+    return measured
+
+
 def test_obstacles_take_segments_and_circles_and_reject_bad_arrays():
     obs = Obstacles.from_arrays(np.array([[0, 0, 1, 0, 2]]), np.array([[3, 4, 5]]))
     assert obs.capsules.tolist() == [[0, 0, 1, 0, 2], [3, 4, 3, 4, 5]]
@@ -148,14 +166,8 @@ def test_the_avoider_steers_round_the_shelf_and_passes_clear_answers_through():
     room = _shelf_room()
     guide = Avoider(room)
     target = np.array([290.0, 45.0])
-    measured = np.array([0.5, 0.3, 0.2])
     through = Solution(np.array([-0.3, -1.2, -0.6]), SolveStatus.SUCCESS, 10, 0.0)
-    # Follow the commanded poses as a chain with ideal motors would: straight in joint space.
-    for _ in range(400):
-        command = guide.steer(measured, through, target, 0.5)
-        assert room.path_clear(measured, command.angles)
-        step = command.angles - measured
-        measured = measured + step * min(1.0, 0.05 / max(np.abs(step).max(), 1e-12))
+    measured = _move_as_told(guide, np.array([0.5, 0.3, 0.2]), through, target, 400)
     assert room.is_clear(measured)
     assert np.hypot(*(room.points(measured)[-1] - target)) <= 0.5
     # Far from everything, the solver's answer comes back as it is.
@@ -272,13 +284,8 @@ def test_a_tree_whose_straight_way_dips_into_the_floor_gets_a_clear_answer_and_r
 def test_the_avoider_brings_both_hands_to_their_targets_without_touching_the_floor():
     room = _two_arms_room()
     guide = Avoider(room)
-    measured = RAISED.copy()
     on_its_way = Solution(HEADING, SolveStatus.PROCESSING, 10, 150.0)
-    for _ in range(300):
-        command = guide.steer(measured, on_its_way, HANDS_LOW_AND_HIGH, 0.5)
-        assert room.path_clear(measured, command.angles)
-        step = command.angles - measured
-        measured = measured + step * min(1.0, 0.05 / max(np.abs(step).max(), 1e-12))
+    measured = _move_as_told(guide, RAISED, on_its_way, HANDS_LOW_AND_HIGH, 300)
     assert room.is_clear(measured)
     assert np.all(room.misses(measured, HANDS_LOW_AND_HIGH) <= 0.5)
 
