@@ -216,11 +216,12 @@ class Clearance:
             starts, ends, _ = tree_points(sk, poses, sk.root_points())
             return np.concatenate((starts, ends))
         path = sk.ancestors.astype(float)
+        root_points = sk.root_points()
         world = poses @ path.T + sk.base_angle
         steps = sk.lengths[:, None] * np.stack((np.cos(world), np.sin(world)), axis=-1)
-        ends = np.einsum("ij,...jd->...id", path, steps) + sk.root_points()
+        ends = np.einsum("ij,...jd->...id", path, steps) + root_points
         roots = (sk.parents < 0)[:, None]
-        starts = np.where(roots, sk.root_points(), ends[..., sk.parents, :])
+        starts = np.where(roots, root_points, ends[..., sk.parents, :])
         return np.concatenate((starts, ends), axis=-2)
 
     def _links(self, pts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -331,9 +332,9 @@ class Clearance:
         Returns the best pose seen: clear first, then nearest the targets (the weighted root
         mean square of the targeted ends' distances, the one distance for a chain; it stops
         after ``STALE_ITERATIONS`` without a better one). ``SUCCESS`` when it is clear and every
-        targeted end is within ``tolerance`` px, else
-        ``PROCESSING``; the solution's error is that mean distance. With ``avoid`` False the
-        obstacles play no part (plain damped least squares).
+        targeted end is within ``tolerance`` px, else ``PROCESSING``; the solution's error is
+        that mean distance. With ``avoid`` False the obstacles play no part (plain damped least
+        squares).
         """
         sk = self.skeleton
         pose = sk.clamp(np.asarray(angles, dtype=float).copy())
