@@ -206,7 +206,7 @@ class Simulation:
         )
         self._result: RunResult | None = None
         self.scene = _scene(level, self.world, self.script)
-        self.controller.avoider = _avoider(self.world, self.scene)
+        self.controller.avoider = _avoider(level, self.world, self.scene)
         self._has_goals = bool(level.goals)
         self._watch = BlockWatch(dt=self.dt, arrival=level.chain.arrival)
         self._blocked_target: np.ndarray | TargetSet | None = None
@@ -625,15 +625,18 @@ def _grown(segments: np.ndarray, circles: np.ndarray, by: float) -> tuple[np.nda
     return grown_segments, grown_circles
 
 
-def _avoider(world: World, scene: Scene) -> Avoider | None:
-    """What keeps the chain clear of the level's static obstacles (None without any, and for
-    a tree: the clearance works on chains)."""
-    if not world.skeleton.is_chain:
+def _avoider(level: Level, world: World, scene: Scene) -> Avoider | None:
+    """What keeps the skeleton clear of the level's static obstacles (None without any, and for
+    a creature with a gait: its feet stand on the ground by design)."""
+    if level.gait is not None:
         return None
     obstacles = Obstacles.from_arrays(scene.segments, scene.circles)
     if not len(obstacles):
         return None
-    return Avoider(Clearance(world.skeleton, world.link_widths / 2.0, obstacles))
+    # A tree re-plans when its motors leave the planned line (its arms swing through a floor
+    # beside the torso); chains keep the plans their levels were tuned with.
+    room = Clearance(world.skeleton, world.link_widths / 2.0, obstacles)
+    return Avoider(room, replan=world.is_tree)
 
 
 def _scene(level: Level, world: World, script: ScriptRunner) -> Scene:

@@ -1,6 +1,8 @@
 """Trees of bones and creatures in the physics world, with every solver: several effectors
 aimed at once, weights settling what cannot all be reached, a gait whose feet hold."""
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -11,6 +13,7 @@ from ikgame.physics.world import build_skeleton
 from ikgame.sim import Simulation
 
 SOLVERS = ["ccd", "jacobian_transpose", "dls", "fabrik"]
+STRESS_LEVELS = Path(__file__).resolve().parents[1] / "benchmarks" / "stress_levels"
 
 
 @pytest.mark.parametrize("solver", SOLVERS)
@@ -35,6 +38,25 @@ def test_two_hands_reach_together_and_settle_at_the_weighted_optimum(solver):
     expected = robust.solve_targets(angles, targets, max_iterations=50, tolerance=0.5).errors
     assert optimum == pytest.approx(expected, abs=1.0)
     assert optimum[0] < optimum[1]  # the heavier hand gets closer
+
+
+@pytest.mark.parametrize("solver", ["dls", "fabrik"])
+def test_a_hand_sent_low_from_crossed_arms_goes_round_the_floor(solver):
+    # Two steps of the two-armed stress level: the arms cross, then the left hand goes low on
+    # the left while the right reaches high. The straight way between those poses in joint
+    # space swings the left hand through the floor, where it used to stay.
+    level = load_level(STRESS_LEVELS / "17_two_arms.toml")
+    level = level.model_copy(update={"script": level.script[1:3], "duration": 12.0})
+    sim = Simulation(level, solver=solver, record=False)
+    room = sim.controller.avoider.clearance
+    closest = np.inf
+    while not sim.done:
+        sim.step()
+        closest = min(closest, float(room.gaps(sim.joint_angles()).min()))
+    result = sim.result
+    assert result.status == "passed"
+    assert all(step.reached for step in result.steps)
+    assert closest > 0.0  # px: no link touched the floor on the way
 
 
 @pytest.mark.parametrize("solver", SOLVERS)

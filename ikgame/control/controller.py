@@ -266,7 +266,7 @@ class Controller:
                 self.solver.solve_targets if isinstance(target, TargetSet) else self.solver.solve
             )
             solution = solve(start, target, max_iterations=self.iterations, tolerance=self.arrival)
-            if self.avoider is not None and not isinstance(target, TargetSet):
+            if self.avoider is not None:
                 solution = self.avoider.steer(start, solution, target, self.arrival)
             self._held = solution.angles
         error = joint_error(solution.angles, measured, self._limited)

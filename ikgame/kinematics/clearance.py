@@ -1,15 +1,18 @@
-"""Keeping a chain clear of static obstacles: distances, clear answers, clear paths.
+"""Keeping a skeleton clear of static obstacles: distances, clear answers, clear paths.
 
-The raw solvers know only the target. In a world with a shelf or a floor their answer can put a
-link through an obstacle, and even a clear answer can be out of the chain's way when the motors
-turn the joints toward it through the obstacle. :class:`Clearance` knows the obstacles, as plain
-arrays, and the chain's links, each a capsule (a segment with a radius, half the link's width):
+The raw solvers know only the targets. In a world with a shelf or a floor their answer can put a
+link through an obstacle, and even a clear answer can be out of the skeleton's way when the
+motors turn the joints toward it through the obstacle. :class:`Clearance` knows the obstacles, as
+plain arrays, and the skeleton's links, each a capsule (a segment with a radius, half the link's
+width). A chain aims its end effector at a point; a tree aims a
+:class:`~ikgame.kinematics.targets.TargetSet` (a chain is the case of one effector):
 
 - **gaps** (:meth:`Clearance.gaps`): each link's smallest distance to any obstacle's surface
   (negative when they overlap), and the same for a batch of poses at once.
-- **a clear answer** (:meth:`Clearance.polish`): damped least squares on the end effector's error
-  with one extra row per link closer than ``ACTIVE`` to an obstacle, asking that gap not to
-  shrink, or to grow back to ``MARGIN`` (the rows of an inequality, active only near contact).
+- **a clear answer** (:meth:`Clearance.polish`): damped least squares on the targeted ends'
+  errors (each row scaled by the square root of its target's weight) with one extra row per link
+  closer than ``ACTIVE`` to an obstacle, asking that gap not to shrink, or to grow back to
+  ``MARGIN`` (the rows of an inequality, active only near contact).
   :meth:`Clearance.clear_answer` polishes a set of seeds (the measured pose, the straight answer,
   the answer with its bends reversed, poses curled either way, ``RANDOM_SEEDS`` random poses
   within the limits) and keeps the clear one that arrives nearest the measured pose, preferring
@@ -24,8 +27,9 @@ arrays, and the chain's links, each a capsule (a segment with a radius, half the
 :class:`Avoider` does this tick by tick for a controller: it takes the solver's answer and
 returns the pose to command, keeping the clear answer and the route for the target until it
 moves, so they are searched once; a chain at rest or in the open costs a dot product a tick.
-While the base moves it plans nothing (a plan would be stale by the next tick). Chains only.
-Angles are radians, distances px.
+While the base moves it plans nothing (a plan would be stale by the next tick). An answer
+arrives when every targeted end is within the tolerance of its target. Angles are radians,
+distances px.
 """
 
 from __future__ import annotations
@@ -37,8 +41,9 @@ from typing import Final
 import numpy as np
 
 from ikgame.kinematics.recovery import SETTLED
-from ikgame.kinematics.skeleton import Skeleton
+from ikgame.kinematics.skeleton import Skeleton, tree_points
 from ikgame.kinematics.solver import Solution, SolveStatus
+from ikgame.kinematics.targets import TargetSet, columns
 
 __all__ = [
     "ACTIVE",
@@ -73,6 +78,10 @@ answers."""
 
 POLISH_ITERATIONS: Final = 80
 """Iterations one seed of a clear answer is polished for."""
+
+FREE_ITERATIONS: Final = 400
+"""Most iterations of the obstacle-free polish that finds how near a target set's ends can come
+(see :meth:`Clearance.clear_answer`)."""
 
 STALE_ITERATIONS: Final = 12
 """A polish that has not improved on its best pose for this many iterations stops there."""
@@ -130,7 +139,7 @@ class Obstacles:
 
 
 class Clearance:
-    """Distances from one chain's links (capsules of ``radii``, px) to static ``obstacles``.
+    """Distances from a skeleton's links (capsules of ``radii``, px) to static ``obstacles``.
 
     Set :attr:`skeleton` when the base moves.
 
@@ -141,13 +150,23 @@ class Clearance:
     [45.0, -55.0]
     >>> room.is_clear(room.polish(np.zeros(2), np.array([120.0, 60.0])).angles)
     True
+
+    A tree aims a :class:`~ikgame.kinematics.targets.TargetSet`; its links start at their
+    parents' ends (here two arms on a torso, both up through the shelf, sent out sideways):
+
+    >>> arms = Skeleton.tree([100.0, 80.0, 80.0], [-1, 0, 0], base_angle=math.pi / 2)
+    >>> room = Clearance(arms, np.full(3, 5.0), shelf)
+    >>> room.gaps(np.zeros(3)).tolist()
+    [45.0, -35.0, -35.0]
+    >>> aim = TargetSet([1, 2], [(-80.0, 100.0), (80.0, 100.0)])
+    >>> sol = room.polish(np.zeros(3), aim)
+    >>> sol.status.name, room.is_clear(sol.angles), bool(room.misses(sol.angles, aim).max() <= 0.5)
+    ('SUCCESS', True, True)
     """
 
     def __init__(
         self, skeleton: Skeleton, radii: np.ndarray, obstacles: Obstacles, *, margin: float = MARGIN
     ) -> None:
-        if not skeleton.is_chain:
-            raise ValueError("clearance is computed for chains")
         radii = np.asarray(radii, dtype=float)
         if radii.shape != (skeleton.count,) or not np.all(np.isfinite(radii)) or np.any(radii < 0):
             raise ValueError(f"radii must be ({skeleton.count},) finite px >= 0")
@@ -161,15 +180,28 @@ class Clearance:
         self._a = caps[:, :2]
         self._b = caps[:, 2:4]
         self._r = caps[:, 4]
-        # How far each point of link i can be from joint j <= i: the step bound of path checks.
+        # How far a point moved by joint j can be from it (the longest way down from joint j
+        # through its subtree): the step bound of path checks.
         lengths = skeleton.lengths
-        self._lever = np.cumsum(lengths[::-1])[::-1]
+        if skeleton.is_chain:
+            self._lever = np.cumsum(lengths[::-1])[::-1]
+        else:
+            lever = lengths.copy()
+            for i in range(skeleton.count - 1, -1, -1):
+                parent = skeleton.parents[i]
+                if parent >= 0:
+                    lever[parent] = max(lever[parent], lengths[parent] + lever[i])
+            self._lever = lever
 
     # -- distances ---------------------------------------------------------------------------
 
     def points(self, poses: np.ndarray) -> np.ndarray:
-        """(..., n + 1, 2) joints then the end effector for (..., n) poses, px."""
+        """Link points for (..., n) poses, px: a chain's (..., n + 1, 2) joints then the end
+        effector; a tree's (..., 2n, 2) link starts then link ends (as
+        :func:`~ikgame.kinematics.skeleton.forward_kinematics` orders them)."""
         sk = self.skeleton
+        if not sk.is_chain:
+            return self._tree_points(poses)
         world = np.cumsum(poses, axis=-1) + sk.base_angle
         steps = sk.lengths[:, None] * np.stack((np.cos(world), np.sin(world)), axis=-1)
         joints = np.concatenate(
@@ -177,11 +209,34 @@ class Clearance:
         )
         return np.cumsum(joints, axis=-2)
 
+    def _tree_points(self, poses: np.ndarray) -> np.ndarray:
+        """(..., 2n, 2) link starts then link ends of a tree for (..., n) poses, px."""
+        sk = self.skeleton
+        if poses.ndim == 1:
+            starts, ends, _ = tree_points(sk, poses, sk.root_points())
+            return np.concatenate((starts, ends))
+        path = sk.ancestors.astype(float)
+        root_points = sk.root_points()
+        world = poses @ path.T + sk.base_angle
+        steps = sk.lengths[:, None] * np.stack((np.cos(world), np.sin(world)), axis=-1)
+        ends = np.einsum("ij,...jd->...id", path, steps) + root_points
+        roots = (sk.parents < 0)[:, None]
+        starts = np.where(roots, root_points, ends[..., sk.parents, :])
+        return np.concatenate((starts, ends), axis=-2)
+
+    def _links(self, pts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Each link's start and end (..., n, 2) from :meth:`points`."""
+        if self.skeleton.is_chain:
+            return pts[..., :-1, :], pts[..., 1:, :]
+        n = self.skeleton.count
+        return pts[..., :n, :], pts[..., n:, :]
+
     def _pairs(self, pts: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Signed gaps (..., n, k), the point on each link nearest the obstacle (..., n, k, 2)
         and the unit direction that widens the gap when that point moves along it."""
-        p0 = pts[..., :-1, None, :]
-        p1 = pts[..., 1:, None, :]
+        starts, ends = self._links(pts)
+        p0 = starts[..., None, :]
+        p1 = ends[..., None, :]
         q0, q1 = self._a, self._b
         # Candidates: each link end against the obstacle, each obstacle end against the link.
         c0 = _nearest_on(p0, q0, q1)
@@ -206,13 +261,20 @@ class Clearance:
     def _gaps(self, pts: np.ndarray) -> np.ndarray:
         """Signed gaps (..., n, k) between links and obstacles, without the directions."""
         q0, q1 = self._a, self._b
-        joints = _distance_to(pts[..., :, None, :], q0, q1)  # (..., n + 1, k)
-        ends = np.stack((q0, q1))[:, None, :]  # (2, 1, k, 2)
-        p0 = pts[..., None, :-1, None, :]
-        p1 = pts[..., None, 1:, None, :]
-        tips = _distance_to(ends, p0, p1).min(axis=-3)  # (..., n, k)
-        d = np.minimum(np.minimum(joints[..., :-1, :], joints[..., 1:, :]), tips)
-        crossing = _crossing(pts[..., :-1, :], pts[..., 1:, :], q0, q1)
+        starts, ends = self._links(pts)
+        if self.skeleton.is_chain:
+            # A chain's links share their joints: each joint's distance is computed once.
+            joints = _distance_to(pts[..., :, None, :], q0, q1)  # (..., n + 1, k)
+            near_start, near_end = joints[..., :-1, :], joints[..., 1:, :]
+        else:
+            near_start = _distance_to(starts[..., :, None, :], q0, q1)  # (..., n, k)
+            near_end = _distance_to(ends[..., :, None, :], q0, q1)
+        obstacle_ends = np.stack((q0, q1))[:, None, :]  # (2, 1, k, 2)
+        p0 = starts[..., None, :, None, :]
+        p1 = ends[..., None, :, None, :]
+        tips = _distance_to(obstacle_ends, p0, p1).min(axis=-3)  # (..., n, k)
+        d = np.minimum(np.minimum(near_start, near_end), tips)
+        crossing = _crossing(starts, ends, q0, q1)
         return np.where(crossing, -d, d) - (self.radii[:, None] + self._r)
 
     def gaps(self, angles: np.ndarray) -> np.ndarray:
@@ -228,7 +290,7 @@ class Clearance:
         return self._gaps(self.points(poses)).min(axis=(-1, -2))
 
     def swept(self, a: np.ndarray, b: np.ndarray) -> float:
-        """Farthest any point of the chain can move on the straight line from pose ``a`` to
+        """Farthest any point of the skeleton can move on the straight line from pose ``a`` to
         ``b``, px: a bound, so a pose ``swept`` px clear at ``a`` stays clear all the way."""
         return float(np.abs(b - a) @ self._lever)
 
@@ -238,55 +300,86 @@ class Clearance:
 
     # -- answers -----------------------------------------------------------------------------
 
+    def _aim(self, target: np.ndarray | TargetSet) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The targeted links, their points (k, 2) px and the square roots of their weights: a
+        chain's point target is its last link's end with weight 1."""
+        if isinstance(target, TargetSet):
+            target.check(self.skeleton)
+            return target.links, target.points, np.sqrt(target.weights)
+        point = np.asarray(target, dtype=float)
+        return np.array([self.skeleton.count - 1]), point[None, :], np.ones(1)
+
+    def misses(self, angles: np.ndarray, target: np.ndarray | TargetSet) -> np.ndarray:
+        """(k,) each targeted end's distance from its target at ``angles``, px (one for a
+        chain's point)."""
+        links, points, _ = self._aim(target)
+        _, ends = self._links(self.points(np.asarray(angles, dtype=float)))
+        off = points - ends[links]
+        return np.hypot(off[:, 0], off[:, 1])
+
     def polish(
         self,
         angles: np.ndarray,
-        target: np.ndarray,
+        target: np.ndarray | TargetSet,
         *,
         iterations: int = POLISH_ITERATIONS,
         tolerance: float = 0.5,
+        avoid: bool = True,
     ) -> Solution:
-        """Damped least squares toward ``target`` that keeps every link ``margin`` px clear.
+        """Damped least squares toward ``target`` (a point for a chain's end effector, or a
+        :class:`~ikgame.kinematics.targets.TargetSet`) that keeps every link ``margin`` px clear.
 
-        Returns the best pose seen: clear first, then nearest the target (it stops after
-        ``STALE_ITERATIONS`` without a better one). ``SUCCESS`` when it is clear and within
-        ``tolerance``, else ``PROCESSING``.
+        Returns the best pose seen: clear first, then nearest the targets (the weighted root
+        mean square of the targeted ends' distances, the one distance for a chain; it stops
+        after ``STALE_ITERATIONS`` without a better one). ``SUCCESS`` when it is clear and every
+        targeted end is within ``tolerance`` px, else ``PROCESSING``; the solution's error is
+        that mean distance. With ``avoid`` False the obstacles play no part (plain damped least
+        squares).
         """
         sk = self.skeleton
         pose = sk.clamp(np.asarray(angles, dtype=float).copy())
-        target = np.asarray(target, dtype=float)
+        links, points, scale = self._aim(target)
+        moves = sk.ancestors  # moves[i, j]: joint j moves link i
         n = sk.count
-        below = np.tril(np.ones((n, n), dtype=bool))  # below[i, j]: joint j moves link i
+        weights = scale**2
         best, best_key, stale = pose, (math.inf, math.inf), 0
-        damping = (0.02 * self._lever[0]) ** 2
+        best_misses = np.full(len(links), math.inf)
+        damping = (0.02 * float(self._lever.max())) ** 2
         for _ in range(iterations):
             pts = self.points(pose)
-            error = target - pts[-1]
-            if len(self.obstacles):
+            starts, ends = self._links(pts)
+            reached = ends[links]
+            off = points - reached
+            if avoid and len(self.obstacles):
                 gap, point, unit = self._pairs(pts)
             else:
                 gap = np.full((n, 0), math.inf)
-            dist = float(np.hypot(*error))
+            misses = np.hypot(off[:, 0], off[:, 1])
+            if len(links) == 1:
+                dist = float(misses[0])
+            else:
+                dist = math.sqrt(float(weights @ misses**2 / weights.sum()))
             key = (max(0.0, -float(gap.min(initial=math.inf))), dist)
             if key < best_key:
-                best, best_key, stale = pose.copy(), key, 0
+                best, best_key, best_misses, stale = pose.copy(), key, misses, 0
             else:
                 stale += 1
                 if stale > STALE_ITERATIONS:
                     break
-            if key[0] == 0.0 and dist <= tolerance and gap.min(initial=math.inf) >= self.margin:
+            arrived = bool(np.all(misses <= tolerance))
+            if key[0] == 0.0 and arrived and gap.min(initial=math.inf) >= self.margin:
                 break
-            arms = pts[-1] - pts[:-1]
-            rows = [np.vstack((-arms[:, 1], arms[:, 0]))]
-            wanted = [error]
-            links, obstacles = np.nonzero(gap < self.margin + ACTIVE)
-            if links.size:
-                p = point[links, obstacles]
-                u = unit[links, obstacles]
-                lever = p[:, None, :] - pts[None, :-1, :]
+            aims = columns(reached, starts, moves[links]) * scale[:, None, None]
+            rows = [aims.reshape(-1, n)]
+            wanted = [(off * scale[:, None]).reshape(-1)]
+            near, obstacles = np.nonzero(gap < self.margin + ACTIVE)
+            if near.size:
+                p = point[near, obstacles]
+                u = unit[near, obstacles]
+                lever = p[:, None, :] - starts[None, :, :]
                 moved = -lever[..., 1] * u[:, None, 0] + lever[..., 0] * u[:, None, 1]
-                rows.append(np.where(below[links], moved, 0.0))
-                wanted.append(np.maximum(self.margin - gap[links, obstacles], 0.0))
+                rows.append(np.where(moves[near], moved, 0.0))
+                wanted.append(np.maximum(self.margin - gap[near, obstacles], 0.0))
             jac = np.vstack(rows)
             err = np.concatenate(wanted)
             step = jac.T @ np.linalg.solve(jac @ jac.T + damping * np.eye(len(err)), err)
@@ -295,18 +388,18 @@ class Clearance:
                 step *= _MAX_STEP / largest
             pose = sk.clamp(pose + step)
         status = SolveStatus.SUCCESS
-        if best_key[0] > 0.0 or best_key[1] > tolerance:
+        if best_key[0] > 0.0 or np.any(best_misses > tolerance):
             status = SolveStatus.PROCESSING
         return Solution(best, status, iterations, best_key[1])
 
     def seeds(self, measured: np.ndarray, answer: np.ndarray) -> list[np.ndarray]:
         """Starts for :meth:`clear_answer`: the measured pose, the answer, the answer with its
-        bends reversed, the chain curled evenly either way, then random poses within the
-        limits (seeded)."""
+        bends reversed (every joint but the roots), the links curled evenly either way, then
+        random poses within the limits (seeded)."""
         sk = self.skeleton
         n = sk.count
-        reversed_bends = -answer
-        reversed_bends[0] = answer[0]
+        roots = sk.parents < 0
+        reversed_bends = np.where(roots, answer, -answer)
         low = np.maximum(sk.lower, -math.pi)
         high = np.minimum(sk.upper, math.pi)
         curl = math.pi / max(n, 2)
@@ -316,21 +409,45 @@ class Clearance:
         return [sk.clamp(np.asarray(s, dtype=float)) for s in starts]
 
     def clear_answer(
-        self, measured: np.ndarray, answer: np.ndarray, target: np.ndarray, tolerance: float
+        self,
+        measured: np.ndarray,
+        answer: np.ndarray,
+        target: np.ndarray | TargetSet,
+        tolerance: float,
     ) -> np.ndarray | None:
-        """A clear pose within ``tolerance`` of ``target``, or None if no seed found one.
+        """A clear pose with every targeted end within ``tolerance`` of its target, or None if
+        no seed found one.
 
-        Among the seeds' polished poses, the first the chain can turn to in a straight clear
+        Among the seeds' polished poses, the first the skeleton can turn to in a straight clear
         line wins; otherwise the clear one nearest ``measured`` in joint space.
+
+        The points of a target set can lie out of joint reach (pulled apart, or one a little
+        past an arm's reach) with the obstacles nowhere near: when no seed arrives, the clear
+        pose nearest the targets (weighted, polished on for ``FREE_ITERATIONS``) is the answer
+        if the obstacles are not what keeps it from them, that is if plain least squares from
+        it (as long, obstacles ignored) brings no end more than ``tolerance`` nearer its
+        target.
         """
         found: list[np.ndarray] = []
+        short: list[Solution] = []
         for start in self.seeds(np.asarray(measured, float), np.asarray(answer, float)):
             sol = self.polish(start, target, tolerance=tolerance)
             if sol.status is not SolveStatus.SUCCESS:
+                if isinstance(target, TargetSet) and self.is_clear(sol.angles):
+                    short.append(sol)
                 continue
             if self.path_clear(measured, sol.angles):
                 return sol.angles
             found.append(sol.angles)
+        if not found and short:
+            start = min(short, key=lambda sol: sol.error).angles
+            # Both polished to the end, so that they differ only where an obstacle is in the way.
+            nearest = self.polish(start, target, iterations=FREE_ITERATIONS).angles
+            free = self.polish(
+                nearest, target, iterations=FREE_ITERATIONS, tolerance=tolerance, avoid=False
+            )
+            gained = self.misses(nearest, target) - self.misses(free.angles, target)
+            return nearest if bool(np.all(gained <= tolerance)) else None
         if not found:
             return None
         return min(found, key=lambda pose: float(np.abs(pose - measured).sum()))
@@ -448,7 +565,9 @@ class Avoider:
     the route are kept until the target moves, so they are searched once (a chain resting short
     of the target for ``RELEASE_CALLS`` calls is handed back to the solver). When no clear
     answer or no route is found, the solver's own solution is returned for that target: the
-    chain behaves as without obstacles (and a jammed one is reported blocked).
+    chain behaves as without obstacles (and a jammed one is reported blocked). With ``replan``,
+    a chain the motors carried off the planned line, whose straight way on to its via pose is
+    blocked from where it is, gets a new route from there.
 
     >>> arm = Skeleton.chain([100.0, 100.0], base_angle=math.pi / 2)
     >>> shelf = Obstacles.from_arrays(np.array([[-50.0, 150.0, 50.0, 150.0, 0.0]]), np.empty((0, 3)))
@@ -459,25 +578,34 @@ class Avoider:
     True
     """
 
-    def __init__(self, clearance: Clearance) -> None:
+    def __init__(self, clearance: Clearance, *, replan: bool = False) -> None:
         self.clearance = clearance
+        self.replan = replan
+        """Whether to route again from where the chain is when the way on is blocked."""
         self._skeleton = clearance.skeleton
         self.reset()
 
     def reset(self) -> None:
         """Forget the clear answer and route (say, after the chain was found blocked)."""
-        self._target: tuple[float, float] | None = None
+        self._target: tuple[float, ...] | None = None
         self._goal: np.ndarray | None = None
         self._way: list[np.ndarray] = []
-        self._given_up: tuple[float, float] | None = None
+        self._given_up: tuple[float, ...] | None = None
+        self._tolerance: float | np.ndarray = 0.0
         self._resting = 0
         self._line: tuple[np.ndarray, np.ndarray, float] | None = None
         self._checked: tuple[np.ndarray, float] | None = None
 
     def steer(
-        self, measured: np.ndarray, solution: Solution, target: np.ndarray, tolerance: float
+        self,
+        measured: np.ndarray,
+        solution: Solution,
+        target: np.ndarray | TargetSet,
+        tolerance: float,
     ) -> Solution:
-        """The solution to command this tick (see the class)."""
+        """The solution to command this tick (see the class): ``target`` is a chain's point or
+        a tree's :class:`~ikgame.kinematics.targets.TargetSet` (kept until any of its points
+        moves)."""
         room = self.clearance
         if room.skeleton is not self._skeleton:
             # The base moved: a plan made for it is stale, and one made now would be stale by the
@@ -485,38 +613,53 @@ class Avoider:
             self._skeleton = room.skeleton
             self.reset()
             return solution
-        key = (float(target[0]), float(target[1]))
+        key = _key(target)
         if key != self._target:
             self._target, self._goal, self._way = None, None, []
         if key == self._given_up:
             return solution
         if self._goal is not None:
-            if not self._arrived(measured, target, tolerance):
+            if not self._arrived(measured, target):
+                if not self.replan or self._clear_way(measured, self._way[0]):
+                    return self._follow(measured, solution)
+                # The motors left the planned line (joints at their speed or torque limits at
+                # different times) and the way on from here is blocked: plan again from here.
+                way = room.route(measured, self._goal)
+                if way is None:
+                    self._given_up = key
+                    return solution
+                self._way = way
                 return self._follow(measured, solution)
             self.reset()
         if self._far_enough(measured, solution.angles):
             return solution
         reaches = solution.status is not SolveStatus.PROCESSING
+        goal = None
         if reaches and room.is_clear(solution.angles):
             if self._clear_way(measured, solution.angles):
                 return solution
             goal = solution.angles
-        else:
+        if goal is None:
             # An answer still on its way (PROCESSING) is no goal to route to: a clear one that
             # arrives is searched for instead.
             goal = room.clear_answer(measured, solution.angles, target, tolerance)
+            if goal is not None:
+                # Ends a clear answer leaves short of targets out of reach arrive within
+                # ``tolerance`` of where it leaves them.
+                misses = room.misses(goal, target)
+                tolerance = np.where(misses > tolerance, misses + tolerance, tolerance)
         way = None if goal is None else room.route(measured, goal)
         if way is None:
             # Searched once for this target: the solver's own answer it is, until it moves.
             self._given_up = key
             return solution
-        self._target, self._goal, self._way = key, goal, way
+        self._target, self._goal, self._way, self._tolerance = key, goal, way, tolerance
         return self._follow(measured, solution)
 
-    def _arrived(self, measured: np.ndarray, target: np.ndarray, tolerance: float) -> bool:
+    def _arrived(self, measured: np.ndarray, target: np.ndarray | TargetSet) -> bool:
         """Whether the solver may answer again: the chain has rested on the clear goal (within
-        ``SETTLED`` of it on every joint) for ``RELEASE_CALLS`` calls with its end effector
-        still farther than ``tolerance`` from the target (sagging short, say), where re-solving
+        ``SETTLED`` of it on every joint) for ``RELEASE_CALLS`` calls with a targeted end
+        still farther than the goal's tolerance from its target (sagging short, say), where re-solving
         from the measured pose brings it the last pixels.
 
         A chain resting on the goal with its end effector on the target keeps the goal until
@@ -529,8 +672,7 @@ class Avoider:
         self._resting += 1
         if self._resting < RELEASE_CALLS:
             return False
-        end = self.clearance.points(measured)[-1]
-        return math.hypot(*(end - target)) > tolerance
+        return bool(np.any(self.clearance.misses(measured, target) > self._tolerance))
 
     def _clear_way(self, measured: np.ndarray, pose: np.ndarray) -> bool:
         """Whether the straight line from ``measured`` to ``pose`` is clear.
@@ -588,6 +730,13 @@ class Avoider:
                 break
         status = SolveStatus.PROCESSING if len(way) > 1 else solution.status
         return Solution(way[0], status, solution.iterations, solution.error)
+
+
+def _key(target: np.ndarray | TargetSet) -> tuple[float, ...]:
+    """What identifies a target: a point's coordinates, or a target set's links then points."""
+    if isinstance(target, TargetSet):
+        return (*map(float, target.links), *map(float, target.points.ravel()))
+    return (float(target[0]), float(target[1]))
 
 
 def _clear_along(gaps: np.ndarray, floor: float) -> bool:

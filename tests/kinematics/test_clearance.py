@@ -3,7 +3,7 @@ import math
 import numpy as np
 import pytest
 
-from ikgame.kinematics import Skeleton, Solution, SolveStatus
+from ikgame.kinematics import Skeleton, Solution, SolveStatus, TargetSet, forward_kinematics
 from ikgame.kinematics.clearance import Avoider, Clearance, Obstacles
 
 UP = math.pi / 2
@@ -37,6 +37,24 @@ def _sampled_gaps(room: Clearance, angles: np.ndarray) -> np.ndarray:
             best = min(best, d - room.radii[i] - r)
         gaps.append(best)
     return np.array(gaps)
+
+
+def _move_as_told(
+    guide: Avoider,
+    measured: np.ndarray,
+    answer: Solution,
+    target: np.ndarray | TargetSet,
+    ticks: int,
+) -> np.ndarray:
+    """The pose after following the avoider's commands for ``ticks`` ticks as a skeleton with
+    ideal motors would (straight in joint space, 0.05 rad a tick at most), each command
+    checked to be a clear straight line from where the skeleton is."""
+    for _ in range(ticks):
+        command = guide.steer(measured, answer, target, 0.5)
+        assert guide.clearance.path_clear(measured, command.angles)
+        step = command.angles - measured
+        measured = measured + step * min(1.0, 0.05 / max(np.abs(step).max(), 1e-12))
+    return measured
 
 
 def test_obstacles_take_segments_and_circles_and_reject_bad_arrays():
@@ -148,14 +166,8 @@ def test_the_avoider_steers_round_the_shelf_and_passes_clear_answers_through():
     room = _shelf_room()
     guide = Avoider(room)
     target = np.array([290.0, 45.0])
-    measured = np.array([0.5, 0.3, 0.2])
     through = Solution(np.array([-0.3, -1.2, -0.6]), SolveStatus.SUCCESS, 10, 0.0)
-    # Follow the commanded poses as a chain with ideal motors would: straight in joint space.
-    for _ in range(400):
-        command = guide.steer(measured, through, target, 0.5)
-        assert room.path_clear(measured, command.angles)
-        step = command.angles - measured
-        measured = measured + step * min(1.0, 0.05 / max(np.abs(step).max(), 1e-12))
+    measured = _move_as_told(guide, np.array([0.5, 0.3, 0.2]), through, target, 400)
     assert room.is_clear(measured)
     assert np.hypot(*(room.points(measured)[-1] - target)) <= 0.5
     # Far from everything, the solver's answer comes back as it is.
@@ -178,13 +190,8 @@ def test_a_chain_at_rest_in_the_open_is_not_measured_again(monkeypatch):
     assert len(calls) == 1
 
 
-def test_clearance_is_for_chains_with_one_radius_per_link():
-    tree = Skeleton(
-        lengths=np.ones(3), parents=np.array([-1, 0, 0]), lower=-1.0, upper=1.0, base=(0, 0)
-    )
+def test_clearance_takes_one_radius_per_link():
     none = Obstacles.from_arrays(NO_SEGMENTS, NO_CIRCLES)
-    with pytest.raises(ValueError, match="chains"):
-        Clearance(tree, np.ones(3), none)
     with pytest.raises(ValueError, match="radii"):
         Clearance(Skeleton.chain([1.0, 1.0]), np.ones(3), none)
 
@@ -201,3 +208,110 @@ def test_while_the_base_moves_the_solver_answers_and_the_plan_is_dropped():
     # Standing still again, it plans afresh for where the base is now.
     replanned = guide.steer(measured, through, target, 0.5)
     assert replanned is not through and room.is_clear(replanned.angles)
+
+
+def _two_arms_room() -> Clearance:
+    """A torso of two links with two arms of three links each (the stress level with two arms),
+    standing 20 px above a floor."""
+    deg = math.radians
+    limits = [(-30, 30), (-25, 25), (0, 170), (-10, 150), (-60, 60), (-170, 0), (-150, 10)]
+    body = Skeleton.tree(
+        [80.0, 70.0, 80.0, 70.0, 35.0, 80.0, 70.0, 35.0],
+        [-1, 0, 1, 2, 3, 1, 5, 6],
+        base_angle=UP,
+        limits=[(deg(a), deg(b)) for a, b in [*limits, (-60, 60)]],
+    )
+    floor = Obstacles.from_arrays(np.array([[-500.0, -20.0, 500.0, -20.0, 4.0]]), NO_CIRCLES)
+    return Clearance(body, np.array([13.0, 12.0, 6.0, 6.0, 5.0, 6.0, 6.0, 5.0]), floor)
+
+
+# Both arms raised, and the pose the solver heads for with the left hand low on the left: the
+# straight way there swings the left arm through the floor.
+RAISED = np.array([0.282, -0.312, 2.967, 2.176, 0.017, -2.133, -2.618, -0.651])
+HEADING = np.array([-0.204, -0.436, 2.845, 0.066, -0.126, -2.967, -2.618, -0.511])
+HANDS_LOW_AND_HIGH = TargetSet([4, 7], [(-110.0, 10.0), (90.0, 300.0)], weights=[2.0, 1.0])
+
+
+def test_a_trees_links_start_at_their_parents_ends():
+    body = Skeleton.tree(
+        [50.0, 40.0, 30.0, 45.0], [-1, 0, 0, -1], root_offsets=[(0, 10), (0, 0), (0, 0), (5, -10)]
+    )
+    obstacles = Obstacles.from_arrays(np.array([[-300.0, 60.0, 300.0, 60.0, 3.0]]), NO_CIRCLES)
+    room = Clearance(body, np.full(4, 4.0), obstacles)
+    poses = np.random.default_rng(8).uniform(-2.0, 2.0, (30, 4))
+    for pose in poses:
+        assert room.points(pose) == pytest.approx(forward_kinematics(body, pose)[0])
+        starts, ends = room.points(pose)[:4], room.points(pose)[4:]
+        u = np.linspace(0.0, 1.0, 400)[:, None]
+        sampled = []
+        for i in range(4):
+            link = starts[i] + u * (ends[i] - starts[i])
+            sampled.append(np.abs(link[:, 1] - 60.0).min() - 4.0 - 3.0)
+        # The obstacle is wide enough that the nearest points are never beyond its ends.
+        clear = np.array(sampled) > 0.0
+        assert room.gaps(pose)[clear] == pytest.approx(np.array(sampled)[clear], abs=0.5)
+    assert room.points(poses) == pytest.approx(np.array([room.points(p) for p in poses]))
+    rng = np.random.default_rng(9)
+    for _ in range(20):
+        a, b = rng.uniform(-2.0, 2.0, (2, 4))
+        line = room.points(a + np.linspace(0.0, 1.0, 200)[:, None] * (b - a))
+        assert np.hypot(*(line - line[0]).T).max() <= room.swept(a, b) + 1e-9
+
+
+def test_a_chain_is_the_one_effector_case_of_a_target_set():
+    room = _shelf_room()
+    target = np.array([290.0, 45.0])
+    through = np.array([-0.3, -1.2, -0.6])
+    as_point = room.polish(through, target)
+    as_set = room.polish(through, TargetSet([2], [target]))
+    assert np.array_equal(as_point.angles, as_set.angles)
+    assert as_point.status is as_set.status is SolveStatus.SUCCESS
+
+
+def test_a_tree_whose_straight_way_dips_into_the_floor_gets_a_clear_answer_and_route():
+    room = _two_arms_room()
+    assert room.is_clear(RAISED) and room.is_clear(HEADING)
+    assert not room.path_clear(RAISED, HEADING)
+    pose = room.clear_answer(RAISED, HEADING, HANDS_LOW_AND_HIGH, 0.5)
+    assert pose is not None and room.is_clear(pose)
+    assert np.all(room.misses(pose, HANDS_LOW_AND_HIGH) <= 0.5)
+    way = room.route(RAISED, HEADING)
+    assert way is not None and len(way) > 1
+    for a, b in zip([RAISED, *way], way, strict=False):
+        assert room.path_clear(a, b)
+
+
+def test_the_avoider_brings_both_hands_to_their_targets_without_touching_the_floor():
+    room = _two_arms_room()
+    guide = Avoider(room)
+    on_its_way = Solution(HEADING, SolveStatus.PROCESSING, 10, 150.0)
+    measured = _move_as_told(guide, RAISED, on_its_way, HANDS_LOW_AND_HIGH, 300)
+    assert room.is_clear(measured)
+    assert np.all(room.misses(measured, HANDS_LOW_AND_HIGH) <= 0.5)
+
+
+def test_a_set_out_of_joint_reach_settles_clear_but_not_through_the_floor():
+    room = _two_arms_room()
+    apart = TargetSet([4, 7], [(-400.0, 150.0), (400.0, 150.0)], weights=[2.0, 1.0])
+    pose = room.clear_answer(RAISED, RAISED, apart, 0.5)
+    assert pose is not None and room.is_clear(pose)
+    # The least squares without obstacles, from there, brings neither hand nearer.
+    free = room.polish(pose, apart, iterations=400, avoid=False).angles
+    assert np.all(room.misses(free, apart) >= room.misses(pose, apart) - 0.5)
+    under_the_floor = TargetSet([4, 7], [(-110.0, -60.0), (90.0, 300.0)])
+    assert room.clear_answer(RAISED, RAISED, under_the_floor, 0.5) is None
+
+
+@pytest.mark.parametrize("replan", [False, True])
+def test_with_replan_a_chain_carried_off_its_route_gets_a_new_one_from_where_it_is(replan):
+    room = _shelf_room()
+    guide = Avoider(room, replan=replan)
+    target = np.array([290.0, 45.0])
+    through = Solution(np.array([-0.3, -1.2, -0.6]), SolveStatus.SUCCESS, 10, 0.0)
+    guide.steer(np.array([0.5, 0.3, 0.2]), through, target, 0.5)
+    # Carried off the line, bent under the shelf's left end: straight on to the via pose the
+    # arm would sweep through the shelf.
+    off = np.array([-0.1, -2.03, 0.23])
+    assert room.is_clear(off)
+    command = guide.steer(off, through, target, 0.5)
+    assert room.path_clear(off, command.angles) is replan
