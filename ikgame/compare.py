@@ -237,10 +237,11 @@ class Comparison:
                     solver=run.solver,
                     status=run.status,
                     sim_time=run.sim_time,
-                    path_length=run.path_lengths[run.effectors[0]],
+                    path_length=run.path_length,
                     times=run.times,
                     errors=run.errors,
                     path=run.path,
+                    other_paths=tuple(run.paths[:, j] for j in range(1, len(run.effectors))),
                     target_trails=tuple(_moving_targets(run)),
                 )
                 for run in self.runs

@@ -301,7 +301,11 @@ def test_a_tree_is_measured_over_every_effector_and_its_solver_timed():
         assert np.isfinite(run.paths).all()
     # Both hands' points of the reach step, and the right hand's line as a moving target.
     np.testing.assert_allclose(comparison.reach_points, [(-110.0, 130.0), (110.0, 140.0)])
-    for trace in comparison.plot_data().traces:
+    for run, trace in zip(comparison.runs, comparison.plot_data().traces, strict=True):
+        # The picture draws both hands' paths and labels their length together.
+        assert len(trace.paths) == 2 and trace.path_length == run.path_length
+        for j, path in enumerate(trace.paths):
+            np.testing.assert_array_equal(path, run.paths[:, j])
         (trail,) = trace.target_trails
         assert trail[0] == pytest.approx((110.0, 140.0), abs=1.0)
         assert trail[-1] == pytest.approx((60.0, 190.0), abs=1.0)

@@ -64,11 +64,13 @@ class SolverTrace:
         solver: the solver's name; it picks the colour (:data:`SOLVER_COLOURS`).
         status: ``passed``, ``failed`` or ``diverged``, shown next to the name.
         sim_time: simulated time the run took, s; the longest run sets the time axis.
-        path_length: distance the end effector travelled, px, shown over its path.
+        path_length: distance the end effector travelled, px, shown over its path (a tree's:
+            every effector's, added up).
         times: (ticks,) simulated time at the end of each tick, s.
         errors: (ticks,) end-effector distance to the target after each tick, px; NaN (no
             target) breaks the line.
-        path: (k, 2) end-effector positions, px.
+        path: (k, 2) end-effector positions, px (a tree's first effector).
+        other_paths: a tree's other effectors' positions, (k, 2) px each, drawn like ``path``.
         target_trails: the route of each moving target, (m, 2) px each, drawn as a pale band.
     """
 
@@ -79,6 +81,7 @@ class SolverTrace:
     times: np.ndarray
     errors: np.ndarray
     path: np.ndarray
+    other_paths: tuple[np.ndarray, ...] = ()
     target_trails: tuple[np.ndarray, ...] = ()
 
     def __post_init__(self) -> None:
@@ -89,13 +92,20 @@ class SolverTrace:
                 f"times and errors must have one value per tick, got {times.size} and {errors.size}"
             )
         path = _array("path", self.path, "k,2")
-        if not len(path):
-            raise ValueError("path must have at least one point")
+        others = tuple(_array("each of other_paths", p, "k,2") for p in self.other_paths)
+        if not all(len(p) for p in (path, *others)):
+            raise ValueError("every path must have at least one point")
         trails = tuple(_array("each target trail", t, "k,2") for t in self.target_trails)
         object.__setattr__(self, "times", times)
         object.__setattr__(self, "errors", errors)
         object.__setattr__(self, "path", path)
+        object.__setattr__(self, "other_paths", others)
         object.__setattr__(self, "target_trails", trails)
+
+    @property
+    def paths(self) -> tuple[np.ndarray, ...]:
+        """Every effector's path, the first effector's first."""
+        return (self.path, *self.other_paths)
 
 
 @dataclass(frozen=True, eq=False)
@@ -218,8 +228,9 @@ def render_comparison(plot: ComparisonPlot, size: tuple[int, int] = (1200, 560))
 
     The left panel plots the end-effector error (px, log scale: errors span from hundreds of px
     down to fractions of one) against simulated time, one coloured line per solver, with the
-    reach tolerance dashed. The right panel draws each solver's end-effector path in its own
-    small map, all at one scale, with the start pose, the base and the numbered targets.
+    reach tolerance dashed. The right panel draws each solver's end-effector path (a tree's: one
+    per effector) in its own small map, all at one scale, with the start pose, the base and the
+    numbered targets.
 
     >>> trace = SolverTrace("ccd", "passed", sim_time=1.0, path_length=90.0,
     ...     times=[0.5, 1.0], errors=[40.0, 2.0], path=[(120, 0), (90, 40), (60, 60)])
@@ -346,7 +357,7 @@ def _path_panels(canvas: _Canvas, plot: ComparisonPlot, box) -> None:
     cell_w = (right - left - gap * (cols - 1)) / cols
     cell_h = (bottom - top - gap * (rows - 1)) / rows
     points = [plot.start_pose, plot.reach_points, np.array([plot.base])]
-    points += [trace.path for trace in plot.traces]
+    points += [path for trace in plot.traces for path in trace.paths]
     every = np.concatenate([p.reshape(-1, 2) for p in points])
     every = every[np.all(np.isfinite(every), axis=1)]
     lo, hi = every.min(axis=0), every.max(axis=0)
@@ -390,8 +401,9 @@ def _path_cell(canvas: _Canvas, plot: ComparisonPlot, trace: SolverTrace, box, t
     # A wide pale band under the effector's line: the route the target took.
     for trail in trace.target_trails:
         cell.line(local(trail), _GRID, 7.0)
-    cell.line(local(trace.path), colour, 1.5)
-    cell.circle(local(trace.path[-1])[0], 3.0, fill=colour)
+    for path in trace.paths:
+        cell.line(local(path), colour, 1.5)
+        cell.circle(local(path[-1])[0], 3.0, fill=colour)
     cell.rect((base[0] - 4, base[1] - 4, base[0] + 4, base[1] + 4), fill=_INK)
     for number, point in enumerate(local(plot.reach_points), start=1):
         cell.circle(point, 6.0, outline=_INK, width=1.5)

@@ -115,6 +115,16 @@ def test_a_target_trail_is_drawn_in_the_path_panel_only():
     assert changed.size and changed.min() >= 600  # the right half: the path panels
 
 
+def test_a_trees_other_effectors_are_drawn_in_the_solvers_colour_in_the_path_panel():
+    # Inside the first path's extent, so the map keeps its scale and only the new line differs.
+    other = np.c_[np.linspace(20.0, 40.0, 50), np.linspace(20.0, 70.0, 50)]
+    one = pixels(render_comparison(make_plot((make_trace("ccd"),))))
+    two = pixels(render_comparison(make_plot((make_trace("ccd", other_paths=(other,)),))))
+    changed = np.any(one != two, axis=2)
+    assert changed.any() and np.flatnonzero(changed.any(axis=0)).min() >= 600
+    assert near(two[changed], SOLVER_COLOURS["ccd"]) > near(one[changed], SOLVER_COLOURS["ccd"])
+
+
 def test_the_tolerance_is_marked_in_the_error_panel_only():
     marked = pixels(render_comparison(make_plot()))
     unmarked = pixels(render_comparison(make_plot(tolerance=None)))
@@ -133,7 +143,9 @@ def test_bad_plot_sizes_are_refused(size):
     [
         (lambda: make_trace("ccd", errors=[1.0, 2.0]), "one value per tick, got 240 and 2"),
         (lambda: make_trace("ccd", path=np.zeros((5, 3))), r"path must be \(k,2\)"),
-        (lambda: make_trace("ccd", path=[]), "path must have at least one point"),
+        (lambda: make_trace("ccd", path=[]), "every path must have at least one point"),
+        (lambda: make_trace("ccd", other_paths=([],)), "every path must have at least one point"),
+        (lambda: make_trace("ccd", other_paths=([1.0, 2.0],)), "each of other_paths must be"),
         (lambda: make_trace("ccd", times=np.zeros((2, 120))), r"times must be \(k\)"),
         (lambda: make_trace("ccd", target_trails=([1.0, 2.0],)), "each target trail must be"),
         (lambda: make_plot(traces=()), "at least one solver trace"),
