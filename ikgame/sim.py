@@ -633,8 +633,9 @@ def _avoider(level: Level, world: World, scene: Scene) -> Avoider | None:
     obstacles = Obstacles.from_arrays(scene.segments, scene.circles)
     if not len(obstacles):
         return None
-    # A tree re-plans when its motors leave the planned line (its arms swing through a floor
-    # beside the torso); chains keep the plans their levels were tuned with.
+    # A tree re-plans when its motors leave the planned line: its arms, swung by a torso that
+    # turns under them, stray from it by more than the margin. A chain follows its line within
+    # the margin, and re-planning would turn it onto other routes round the same obstacles.
     room = Clearance(world.skeleton, world.link_widths / 2.0, obstacles)
     return Avoider(room, replan=world.is_tree)
 
