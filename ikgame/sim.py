@@ -633,9 +633,10 @@ def _avoider(level: Level, world: World, scene: Scene) -> Avoider | None:
     obstacles = Obstacles.from_arrays(scene.segments, scene.circles)
     if not len(obstacles):
         return None
-    # A tree re-plans when its motors leave the planned line: its arms, swung by a torso that
-    # turns under them, stray from it by more than the margin. A chain follows its line within
-    # the margin, and re-planning would turn it onto other routes round the same obstacles.
+    # A tree re-plans when its motors leave the planned line: a hand of the two-armed torso
+    # strays below a clear line onto the floor beside it and catches there. A chain follows its
+    # line within the margin, and re-planning turns some onto other routes round the same
+    # obstacles (measured on two levels; not yet judged better or worse).
     room = Clearance(world.skeleton, world.link_widths / 2.0, obstacles)
     return Avoider(room, replan=world.is_tree)
 
