@@ -29,6 +29,10 @@ PATH_SAMPLES: Final = 64
 SINK_DEPTH: Final = 10.0
 """How deep below the ground (px) :class:`Footing` can see a foot sink."""
 
+_FEW_RAYS: Final = 16
+"""Up to this many rays, :meth:`Terrain.heights` casts them one by one in Python floats (as many
+as a tick casts, one per foot), where numpy's per-call overhead costs more than the arithmetic."""
+
 STILL: Final = 1e-6
 """A rest spot moving slower than this sideways (px/s) is standing still."""
 
@@ -127,6 +131,21 @@ class Terrain:
         self._edge_low = np.minimum(corners[..., 1], ends[..., 1])
         self._edge_high = np.maximum(corners[..., 1], ends[..., 1])
         self._discs = np.concatenate([np.hstack([a, radius]), np.hstack([b, radius]), circs])
+        # The same as Python floats, for the few rays a tick casts (see _few_heights).
+        self._disc_rows = [(cx, cy, r * r) for cx, cy, r in self._discs.tolist()]
+        self._edge_rows = [
+            list(zip(*rows, strict=True))
+            for rows in zip(
+                self._edge_start[..., 0].tolist(),
+                self._edge_start[..., 1].tolist(),
+                self._edge_dx.tolist(),
+                self._edge_delta[..., 1].tolist(),
+                self._edge_vertical.tolist(),
+                self._edge_low.tolist(),
+                self._edge_high.tolist(),
+                strict=True,
+            )
+        ]
 
     def heights(self, xs: ArrayLike, y_from: ArrayLike) -> np.ndarray:
         """:meth:`ground_below` for many rays at once (``xs`` and ``y_from`` broadcast
@@ -136,6 +155,12 @@ class Terrain:
         array([10.,  8., nan])
         """
         x, top = np.broadcast_arrays(np.asarray(xs, dtype=float), np.asarray(y_from, dtype=float))
+        if x.size <= _FEW_RAYS:
+            found = [
+                self._height(*ray)
+                for ray in zip(x.ravel().tolist(), top.ravel().tolist(), strict=True)
+            ]
+            return np.array(found, dtype=float).reshape(x.shape)
         x, top = x[..., None], top[..., None]
         cx, cy, r = self._discs.T
         half = r * r - (x - cx) ** 2
@@ -157,6 +182,34 @@ class Terrain:
         )
         hit = np.maximum(disc_hit, rect_hit)
         return np.where(np.isfinite(hit), hit, np.nan)
+
+    def _height(self, x: float, top: float) -> float:
+        """One ray of :meth:`heights`, in Python floats: the same operations on each disc and
+        edge, in the same order, so the same results to the bit."""
+        disc_hit = -math.inf
+        for cx, cy, rr in self._disc_rows:
+            off = x - cx
+            half = rr - off * off
+            chord = math.sqrt(max(half, 0.0))
+            if half >= 0 and cy - chord <= top:
+                disc_hit = max(disc_hit, min(cy + chord, top))
+        rect_hit = -math.inf
+        for edges in self._edge_rows:
+            high, low = -math.inf, math.inf
+            for sx, sy, dx, dy, vertical, edge_low, edge_high in edges:
+                across = x - sx
+                if vertical:
+                    if across == 0:
+                        high, low = max(high, edge_high), min(low, edge_low)
+                    continue
+                t = across / dx
+                if 0 <= t <= 1:
+                    ys = sy + t * dy
+                    high, low = max(high, ys), min(low, ys)
+            if low <= top:
+                rect_hit = max(rect_hit, min(high, top))
+        hit = max(disc_hit, rect_hit)
+        return hit if math.isfinite(hit) else math.nan
 
     def ground_below(self, x: float, y_from: float) -> float | None:
         """Where a ray cast straight down from ``(x, y_from)`` first meets an obstacle: its

@@ -84,16 +84,13 @@ class _Passes:
     overhead costs more than the arithmetic), with the pass itself."""
 
     def __init__(self, problem: Problem) -> None:
-        skeleton = problem.skeleton
-        mask = problem.mask
-        self.below: list[list[int]] = [
-            np.flatnonzero(mask[:, i]).tolist() for i in range(skeleton.count)
-        ]
-        self.free: list[bool] = (~skeleton.limited).tolist()
-        self.lower: list[float] = skeleton.lower.tolist()
-        self.upper: list[float] = skeleton.upper.tolist()
+        shared = problem.layout
+        self.below = shared.below
+        self.free = shared.free
+        self.lower = shared.lower
+        self.upper = shared.upper
         self.tx, self.ty = (list(v) for v in zip(*problem.points.tolist(), strict=True))
-        self.weights: list[float] = problem.weights.tolist()
+        self.weights = shared.weight_list
         self.links = problem.links
         self.tolerance_sqr = problem.tolerance**2
 
@@ -110,6 +107,11 @@ class _Passes:
         sy = starts[:, 1].tolist()
         new = angles.tolist()
         turned = False
+        tolerance_sqr = self.tolerance_sqr
+        # Whether each target is within the tolerance; a turn only changes those below it.
+        inside = [
+            (tx[j] - px[j]) ** 2 + (ty[j] - py[j]) ** 2 <= tolerance_sqr for j in range(len(px))
+        ]
         for i in range(len(new) - 1, -1, -1):
             below = self.below[i]
             if not below:
@@ -133,14 +135,12 @@ class _Passes:
             cos_rot, sin_rot = math.cos(rot), math.sin(rot)
             for j in below:
                 rx, ry = px[j] - jx, py[j] - jy
-                px[j] = jx + cos_rot * rx - sin_rot * ry
-                py[j] = jy + sin_rot * rx + cos_rot * ry
+                px[j] = x = jx + cos_rot * rx - sin_rot * ry
+                py[j] = y = jy + sin_rot * rx + cos_rot * ry
+                inside[j] = (tx[j] - x) ** 2 + (ty[j] - y) ** 2 <= tolerance_sqr
             if not turned and abs(rot) * math.sqrt(longest) > TRIVIAL_ARC_LENGTH:
                 turned = True
-            if all(
-                (tx[j] - px[j]) ** 2 + (ty[j] - py[j]) ** 2 <= self.tolerance_sqr
-                for j in range(len(px))
-            ):
+            if all(inside):
                 break
         angles[:] = new
         return turned

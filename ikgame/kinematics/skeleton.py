@@ -289,6 +289,13 @@ class Skeleton:
         return self.base + offsets @ np.array(((c, s), (-s, c)))
 
     @cached_property
+    def _memo(self) -> dict[object, object]:
+        """Work that depends only on the links and limits (a solver's set-up for a target set,
+        say), done once per skeleton: :meth:`moved_to` copies share it as they share those
+        arrays. Kept within the kinematics package."""
+        return {}
+
+    @cached_property
     def limited(self) -> np.ndarray:
         """(n,) bool: which joints have a finite limit on either side."""
         return np.isfinite(self.lower) | np.isfinite(self.upper)
