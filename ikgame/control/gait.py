@@ -131,11 +131,14 @@ class Terrain:
         self._edge_low = np.minimum(corners[..., 1], ends[..., 1])
         self._edge_high = np.maximum(corners[..., 1], ends[..., 1])
         self._discs = np.concatenate([np.hstack([a, radius]), np.hstack([b, radius]), circs])
-        # The same as Python floats, for the few rays a tick casts (see _few_heights).
-        self._disc_rows = [(cx, cy, r * r) for cx, cy, r in self._discs.tolist()]
+        # The same as Python floats, for the few rays a tick casts (see _height), each part
+        # with the x range outside which no ray can meet it.
+        self._disc_rows = [
+            (*_x_range(cx - r, cx + r), cx, cy, r * r) for cx, cy, r in self._discs.tolist()
+        ]
         self._edge_rows = [
-            list(zip(*rows, strict=True))
-            for rows in zip(
+            (*_x_range(min(xs), max(xs)), list(zip(xs, *rows, strict=True)))
+            for xs, *rows in zip(
                 self._edge_start[..., 0].tolist(),
                 self._edge_start[..., 1].tolist(),
                 self._edge_dx.tolist(),
@@ -187,14 +190,18 @@ class Terrain:
         """One ray of :meth:`heights`, in Python floats: the same operations on each disc and
         edge, in the same order, so the same results to the bit."""
         disc_hit = -math.inf
-        for cx, cy, rr in self._disc_rows:
+        for lo, hi, cx, cy, rr in self._disc_rows:
+            if not lo <= x <= hi:
+                continue
             off = x - cx
             half = rr - off * off
             chord = math.sqrt(max(half, 0.0))
             if half >= 0 and cy - chord <= top:
                 disc_hit = max(disc_hit, min(cy + chord, top))
         rect_hit = -math.inf
-        for edges in self._edge_rows:
+        for lo, hi, edges in self._edge_rows:
+            if not lo <= x <= hi:
+                continue
             high, low = -math.inf, math.inf
             for sx, sy, dx, dy, vertical, edge_low, edge_high in edges:
                 across = x - sx
@@ -222,6 +229,13 @@ class Terrain:
         """
         hit = float(self.heights(x, y_from))
         return None if math.isnan(hit) else hit
+
+
+def _x_range(lo: float, hi: float) -> tuple[float, float]:
+    """``[lo, hi]`` widened by far more than rounding: a ray outside it cannot meet a part
+    spanning ``lo`` to ``hi``, however its arithmetic rounds."""
+    slack = 1e-6 * (abs(lo) + abs(hi) + 1.0)
+    return lo - slack, hi + slack
 
 
 def default_groups(legs: Sequence[str]) -> tuple[tuple[str, ...], ...]:
