@@ -460,20 +460,25 @@ class Gait:
         stands for a tick at least."""
         params = self._params
         spots = self._rest_world(self._position, self._angle)
-        arm = spots - self._position
-        sideways = self._velocity[0] - self._spin * arm[:, 1]
-        direction = np.where(np.abs(sideways) > STILL, np.sign(sideways), 0.0)
-        gap = spots[:, 0] - self._planted[:, 0]
-        due = np.where(
-            direction != 0,
-            direction * gap > params.threshold,
-            np.abs(gap) > max(params.threshold, params.stride / 2),
-        )
+        # Python floats, elementwise as numpy would be: a handful of legs, every tick.
+        body_y = float(self._position[1])
+        velocity_x, spin = float(self._velocity[0]), self._spin
+        either_way = max(params.threshold, params.stride / 2)
+        direction: list[float] = []
+        due: list[bool] = []
+        for x, y, foot_x in zip(
+            spots[:, 0].tolist(), spots[:, 1].tolist(), self._planted[:, 0].tolist(), strict=True
+        ):
+            sideways = velocity_x - spin * (y - body_y)
+            heading = math.copysign(1.0, sideways) if abs(sideways) > STILL else 0.0
+            gap = x - foot_x
+            direction.append(heading)
+            due.append(heading * gap > params.threshold if heading != 0 else abs(gap) > either_way)
         for k in range(len(self._groups)):
             group = (self._turn + k) % len(self._groups)
-            if group != landed and due[self._members[group]].any():
+            if group != landed and any(due[i] for i in self._members[group].tolist()):
                 self._turn = (group + 1) % len(self._groups)
-                self._step = self._plan(group, time, direction)
+                self._step = self._plan(group, time, np.array(direction))
                 return
 
     def _plan(self, group: int, time: float, direction: np.ndarray) -> _Step:
@@ -537,7 +542,7 @@ class Footing:
         self._ground = ground
         self._settle = _number("settle", settle, positive=True)
         self._planted = dict.fromkeys(self._legs, False)
-        self._down: dict[str, np.ndarray | None] = dict.fromkeys(self._legs)
+        self._down: dict[str, tuple[float, float] | None] = dict.fromkeys(self._legs)
         self._steps = dict.fromkeys(self._legs, 0)
         self._landing = dict.fromkeys(self._legs, 0.0)
         self._slip = dict.fromkeys(self._legs, 0.0)
@@ -548,16 +553,16 @@ class Footing:
         at = np.array([positions[leg] for leg in self._legs], dtype=float)
         # Rays from a little above each foot: from higher up, the top of a wall the foot stands
         # beside would read as ground it sank into.
-        grounds = self._ground.heights(at[:, 0], at[:, 1] + SINK_DEPTH)
-        for j, leg in enumerate(self._legs):
-            where = at[j]
-            if not math.isnan(grounds[j]):
-                self._sink[leg] = max(self._sink[leg], float(grounds[j] - where[1]))
+        grounds = self._ground.heights(at[:, 0], at[:, 1] + SINK_DEPTH).tolist()
+        for leg, (x, y), ground in zip(self._legs, at.tolist(), grounds, strict=True):
+            if not math.isnan(ground):
+                self._sink[leg] = max(self._sink[leg], ground - y)
             foot = feet[leg]
             if not foot.planted:
                 self._planted[leg], self._down[leg] = False, None
                 continue
-            off = float(np.hypot(*(where - foot.point)))
+            foot_x, foot_y = foot.point.tolist()
+            off = float(np.hypot(x - foot_x, y - foot_y))
             if not self._planted[leg]:
                 self._planted[leg] = True
                 self._steps[leg] += 1
@@ -565,9 +570,9 @@ class Footing:
             down = self._down[leg]
             if down is None:
                 if off <= self._settle:
-                    self._down[leg] = where.copy()
+                    self._down[leg] = (x, y)
                 continue
-            self._slip[leg] = max(self._slip[leg], float(np.hypot(*(where - down))))
+            self._slip[leg] = max(self._slip[leg], float(np.hypot(x - down[0], y - down[1])))
 
     def as_dict(self) -> dict[str, dict[str, float | int]]:
         """Per leg: ``steps`` (plantings begun) and ``landing``, ``slip`` and ``sink`` (px, 6

@@ -71,11 +71,14 @@ aims at, or their weights, starts afresh past this many."""
 
 
 def layout(skeleton: Skeleton, targets: TargetSet) -> Layout:
-    """The :class:`Layout` of ``targets`` on ``skeleton``, from the skeleton's memo if there."""
+    """The :class:`Layout` of ``targets`` on ``skeleton``, from the skeleton's memo if there;
+    ``ValueError`` unless every targeted link is one of the skeleton's (checked once per
+    layout: the memo holds only links that passed)."""
     key = ("layout", targets.links.tobytes(), targets.weights.tobytes())
     memo = skeleton._memo
     found = memo.get(key)
     if found is None:
+        targets.check(skeleton)
         if len(memo) >= _LAYOUTS_KEPT:
             memo.clear()
         found = memo[key] = Layout(skeleton, targets.links, targets.weights)
@@ -91,13 +94,12 @@ class Problem:
     """A skeleton and its targets, as the arrays a solve reads every iteration."""
 
     def __init__(self, skeleton: Skeleton, targets: TargetSet, tolerance: float) -> None:
-        targets.check(skeleton)
+        self.layout = shared = layout(skeleton, targets)  # checks the links, too
         self.skeleton = skeleton
         self.tolerance = tolerance
         self.links = targets.links
         self.points = targets.points
         self.weights = targets.weights
-        self.layout = shared = layout(skeleton, targets)
         self.total_weight = shared.total_weight
         self.row_scale = shared.row_scale
         self.mask = shared.mask

@@ -100,6 +100,7 @@ class _Passes:
         Stops early once every target is within the tolerance.
         """
         tx, ty, weights = self.tx, self.ty, self.weights
+        below_of, free, lower, upper = self.below, self.free, self.lower, self.upper
         effectors = ends[self.links]
         px = effectors[:, 0].tolist()
         py = effectors[:, 1].tolist()
@@ -112,8 +113,9 @@ class _Passes:
         inside = [
             (tx[j] - px[j]) ** 2 + (ty[j] - py[j]) ** 2 <= tolerance_sqr for j in range(len(px))
         ]
+        # Comparisons below stand for max() and min() (the same picks, without the calls).
         for i in range(len(new) - 1, -1, -1):
-            below = self.below[i]
+            below = below_of[i]
             if not below:
                 continue
             jx, jy = sx[i], sy[i]
@@ -123,13 +125,17 @@ class _Passes:
                 qx, qy = tx[j] - jx, ty[j] - jy
                 dot += weights[j] * (rx * qx + ry * qy)
                 cross += weights[j] * (rx * qy - ry * qx)
-                longest = max(longest, rx * rx + ry * ry)
+                arm_sqr = rx * rx + ry * ry
+                if arm_sqr > longest:
+                    longest = arm_sqr
             rot = math.atan2(cross, dot)
             wanted = new[i] + rot
-            if self.free[i]:
+            if free[i]:
                 new[i] = wrap_angle(wanted)
             else:
-                clamped = min(max(wanted, self.lower[i]), self.upper[i])
+                clamped = lower[i] if lower[i] > wanted else wanted
+                if upper[i] < clamped:
+                    clamped = upper[i]
                 rot += clamped - wanted
                 new[i] = clamped
             cos_rot, sin_rot = math.cos(rot), math.sin(rot)
