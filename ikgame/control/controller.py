@@ -178,7 +178,7 @@ class Controller:
             base_velocity, spin = base_motion
             arms = points - self.skeleton.base
             velocity = velocity - base_velocity - spin * np.column_stack((-arms[:, 1], arms[:, 0]))
-        if not np.any(velocity):
+        if not velocity.any():
             return None
         skeleton, damping = self.skeleton, self._damping
         if links is None and skeleton.is_chain and skeleton.count <= FLOAT_LINKS:

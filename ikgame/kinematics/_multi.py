@@ -127,7 +127,7 @@ class Problem:
 
     def arrived(self, errors: np.ndarray) -> bool:
         """Whether every targeted end is within the tolerance."""
-        return bool(np.all(np.einsum("ij,ij->i", errors, errors) <= self.tolerance**2))
+        return bool((np.einsum("ij,ij->i", errors, errors) <= self.tolerance**2).all())
 
     def jacobian(self, starts: np.ndarray, ends: np.ndarray) -> np.ndarray:
         """(2k, n) stacked Jacobian with each target's rows scaled by sqrt(weight)."""

@@ -39,7 +39,7 @@ def check_point(point: object, name: str = "target") -> np.ndarray:
         raise ValueError(f"{name} must be a pair of numbers (x, y), got {point!r}") from exc
     if arr.shape != (2,):
         raise ValueError(f"{name} must have shape (2,), got shape {arr.shape}")
-    if not np.all(np.isfinite(arr)):
+    if not np.isfinite(arr).all():
         raise ValueError(f"{name} must be finite, got {arr.tolist()}")
     return arr
 
@@ -56,7 +56,7 @@ def check_angles(angles: object, count: int) -> np.ndarray:
         raise ValueError(f"angles must be numbers, got {angles!r}") from exc
     if arr.shape != (count,):
         raise ValueError(f"angles must have shape ({count},), got shape {arr.shape}")
-    if not np.all(np.isfinite(arr)):
+    if not np.isfinite(arr).all():
         raise ValueError(f"angles must be finite, got {arr.tolist()}")
     return arr
 
@@ -372,7 +372,7 @@ class Skeleton:
         >>> Skeleton.tree([1, 1, 1], [-1, 0, 0]).world_angles(np.array([0.5, 0.25, -0.5])).tolist()
         [0.5, 0.75, 0.0]
         """
-        path = np.cumsum(angles) if self.is_chain else self.ancestors @ angles
+        path = np.cumsum(angles) if self.is_chain else self._paths @ angles
         return path + self.base_angle
 
     def clamp(self, angles: np.ndarray) -> np.ndarray:
