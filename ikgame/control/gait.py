@@ -12,6 +12,8 @@ Positions are world px (y up), angles radians, times s.
 
 from __future__ import annotations
 
+import bisect
+import itertools
 import math
 import numbers
 from collections.abc import Mapping, Sequence
@@ -133,10 +135,10 @@ class Terrain:
         self._discs = np.concatenate([np.hstack([a, radius]), np.hstack([b, radius]), circs])
         # The same as Python floats, for the few rays a tick casts (see _height), each part
         # with the x range outside which no ray can meet it.
-        self._disc_rows = [
+        disc_rows = [
             (*_x_range(cx - r, cx + r), cx, cy, r * r) for cx, cy, r in self._discs.tolist()
         ]
-        self._edge_rows = [
+        edge_rows = [
             (*_x_range(min(xs), max(xs)), list(zip(xs, *rows, strict=True)))
             for xs, *rows in zip(
                 self._edge_start[..., 0].tolist(),
@@ -148,6 +150,17 @@ class Terrain:
                 self._edge_high.tolist(),
                 strict=True,
             )
+        ]
+        # The x axis cut at every part's range ends, with the parts whose range meets each
+        # cut (in their order here): a ray looks at its own cut's parts only.
+        self._cuts = sorted({end for row in disc_rows + edge_rows for end in row[:2]})
+        bounds = [-math.inf, *self._cuts, math.inf]
+        self._parts = [
+            (
+                [row for row in disc_rows if row[0] <= right and row[1] >= left],
+                [row for row in edge_rows if row[0] <= right and row[1] >= left],
+            )
+            for left, right in itertools.pairwise(bounds)
         ]
 
     def heights(self, xs: ArrayLike, y_from: ArrayLike) -> np.ndarray:
@@ -189,8 +202,9 @@ class Terrain:
     def _height(self, x: float, top: float) -> float:
         """One ray of :meth:`heights`, in Python floats: the same operations on each disc and
         edge, in the same order, so the same results to the bit."""
+        discs, segments = self._parts[bisect.bisect_right(self._cuts, x)]
         disc_hit = -math.inf
-        for lo, hi, cx, cy, rr in self._disc_rows:
+        for lo, hi, cx, cy, rr in discs:
             if not lo <= x <= hi:
                 continue
             off = x - cx
@@ -199,7 +213,7 @@ class Terrain:
             if half >= 0 and cy - chord <= top:
                 disc_hit = max(disc_hit, min(cy + chord, top))
         rect_hit = -math.inf
-        for lo, hi, edges in self._edge_rows:
+        for lo, hi, edges in segments:
             if not lo <= x <= hi:
                 continue
             high, low = -math.inf, math.inf

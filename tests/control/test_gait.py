@@ -348,7 +348,8 @@ def test_a_few_rays_cast_one_by_one_give_the_batch_cast_to_the_bit():
     circles = np.hstack([rng.uniform(-200, 200, (6, 2)), rng.uniform(1, 40, (6, 1))])
     terrain = Terrain(segments, circles)
     corners = terrain._edge_start[..., 0].ravel()
-    xs = np.concatenate([rng.uniform(-220, 220, 400), corners, segments[:, [0, 2]].ravel()])
+    cuts = np.array(terrain._cuts)  # where the one-by-one cast changes the parts it looks at
+    xs = np.concatenate([rng.uniform(-220, 220, 400), corners, segments[:, [0, 2]].ravel(), cuts])
     tops = rng.uniform(-250, 250, xs.shape[0])
     many = terrain.heights(xs, tops)
     few = np.concatenate(
