@@ -101,10 +101,11 @@ class Servo:
         self.max_speed = np.asarray(max_speed, dtype=float)
         self.gain = float(gain)
         count = len(self.max_torque)
-        self._stalled = np.zeros(count, dtype=bool)
-        self._saturated = np.zeros(count, dtype=bool)
-        self._velocities = np.zeros(count)
-        self._carried = np.zeros(count)
+        # Per joint, as lists: the float path (most chains) reads and writes them every tick.
+        self._stalled = [False] * count
+        self._saturated = [False] * count
+        self._velocities = [0.0] * count
+        self._carried = [0.0] * count
         self._floats = FloatInertia(inertia) if inertia.count <= FLOAT_LINKS else None
         self._sections = inertia.count > SECTION_LINKS
         self._limits = self.max_torque.tolist()
@@ -114,7 +115,7 @@ class Servo:
     def stalled(self) -> np.ndarray:
         """(n,) bool: joints that gave up pushing for their goal at their torque limit (see
         :meth:`retry`)."""
-        return self._stalled.copy()
+        return np.array(self._stalled, dtype=bool)
 
     def _room(self, torques: np.ndarray, hold: np.ndarray, share: float) -> np.ndarray:
         """The ``share`` of each joint's torque left, beyond its ``hold`` load, on the side of
@@ -125,7 +126,7 @@ class Servo:
     def retry(self) -> None:
         """Let joints that stalled at their torque limit push for their goals again: the target
         moved, or the world changed (gravity), so the goal may be within reach now."""
-        self._stalled[:] = False
+        self._stalled = [False] * len(self._stalled)
 
     def command(
         self,
@@ -167,14 +168,15 @@ class Servo:
         # means moving from the goal faster and faster for a while: an overshoot that the motor
         # is braking slows down instead, and is no stall.
         carried = (
-            self._saturated
+            np.array(self._saturated)
             & (velocities * error < 0.0)
-            & (np.abs(velocities) > np.maximum(np.abs(self._velocities), STALL_SPEED))
+            & (np.abs(velocities) > np.maximum(np.abs(np.array(self._velocities)), STALL_SPEED))
         )
-        self._carried = np.where(carried, self._carried + dt, 0.0)
-        self._stalled |= self._carried >= STALL_TIME
-        self._velocities = velocities
-        size = np.where(self._stalled, 0.0, np.abs(error))
+        carried_for = np.where(carried, np.array(self._carried) + dt, 0.0)
+        stalled = np.array(self._stalled) | (carried_for >= STALL_TIME)
+        self._carried, self._stalled = carried_for.tolist(), stalled.tolist()
+        self._velocities = velocities.tolist()
+        size = np.where(stalled, 0.0, np.abs(error))
         speed = np.minimum(
             np.minimum(self.max_speed, self.gain * size), np.sqrt(2.0 * brake * size)
         )
@@ -218,7 +220,7 @@ class Servo:
             # swing's own loads, clipped, would fight the pivots and fling a long chain apart.
             # Gravity and the wanted acceleration alone, and pymunk's pivots find the rest.
             drive = fit_drive(hold, push, wanted_acceleration, self.max_torque, head)
-        self._saturated = drive.saturated
+        self._saturated = drive.saturated.tolist()
         return ServoCommand(
             rates=velocities + drive.accelerations * dt,
             torques=drive.loads.torques,
@@ -240,21 +242,20 @@ class Servo:
         pose = tree.pose(world_angles)
         limits, speeds, gain = self._limits, self._speeds, self.gain
         errors, now = error.tolist(), velocities.tolist()
-        hold = pose.loads(gravity=(float(gravity[0]), float(gravity[1])))
+        hold, swing, inertia = pose.rest((float(gravity[0]), float(gravity[1])), now)
         held = hold[0]
-        inertia = pose.inertia()
-        saturated, before = self._saturated.tolist(), self._velocities.tolist()
-        carried, stalled = self._carried.tolist(), self._stalled.tolist()
+        saturated, before = self._saturated, self._velocities
+        carried, stalled = self._carried, self._stalled
+        n = len(errors)
         # Each step as in command, with numpy's maximum and minimum written out (same floats).
-        up, down, closing = [], [], []
+        up, down, closing = [0.0] * n, [0.0] * n, [0.0] * n
         stop_in = math.inf
-        for j, e in enumerate(errors):
-            lim, h, i, v = limits[j], held[j], inertia[j], now[j]
-            u, d = lim - h, lim + h
+        for j in range(n):
+            lim, e, v, i = limits[j], errors[j], now[j], inertia[j]
+            u, d = lim - held[j], lim + held[j]
             u = (0.0 if 0.0 > u else u) / i
             d = (0.0 if 0.0 > d else d) / i
-            up.append(u)
-            down.append(d)
+            up[j], down[j] = u, d
             against = d if e > 0.0 else u
             floor = BRAKE_FLOOR * lim / i
             brake = BRAKE_SHARE * (floor if floor > against else against)
@@ -274,13 +275,11 @@ class Servo:
             by_brake = math.sqrt(2.0 * brake * size)
             speed = by_brake if by_brake < speed else speed
             c = _sign(e) * speed
-            closing.append(c)
+            closing[j] = c
             if abs(c) > 1e-9:
                 stop = 2.0 * abs(e) / abs(c)
                 stop_in = stop if stop < stop_in else stop_in
-        self._carried = np.array(carried)
-        self._stalled = np.array(stalled)
-        self._velocities = velocities
+        self._velocities = now
         if stop_in != math.inf:
             halt = pose.loads(alpha=tree.along([-c / stop_in for c in closing]))[0]
             factor = _fit_floats(halt, held, limits, BRAKE_SHARE)
@@ -290,13 +289,15 @@ class Servo:
         target = [min(max(t, -s), s) for t, s in zip(closing, speeds, strict=True)]
         spin = pose.loads(omega=tree.along(target))[0]
         factor = _fit_floats(spin, held, limits, 1.0 - BRAKE_SHARE)
-        wanted = [
-            min(max(t * factor, v - d * dt), v + u * dt)
-            for t, v, d, u in zip(target, now, down, up, strict=True)
-        ]
-        accelerations = [(w - v) / dt for w, v in zip(wanted, now, strict=True)]
+        accelerations = [0.0] * n
+        for j in range(n):
+            # min(max(t, v - d dt), v + u dt) as Python's min and max take it.
+            v, wanted = now[j], target[j] * factor
+            slowest, fastest = v - down[j] * dt, v + up[j] * dt
+            wanted = slowest if slowest > wanted else wanted
+            wanted = fastest if fastest < wanted else wanted
+            accelerations[j] = (wanted - v) / dt
         push = pose.loads(alpha=tree.along(accelerations))
-        swing = pose.loads(omega=tree.along(now))
         bias = (
             [a + b for a, b in zip(hold[0], swing[0], strict=True)],
             [a + b for a, b in zip(hold[1], swing[1], strict=True)],
@@ -313,7 +314,7 @@ class Servo:
         if not consistent:
             # See command: gravity and the wanted acceleration alone, pymunk's pivots the rest.
             reached, loads, saturated, _ = fit_floats(hold, push, accelerations, limits, head)
-        self._saturated = np.array(saturated)
+        self._saturated = saturated
         torques = loads[0]
         return ServoCommand(
             rates=np.array([v + a * dt for v, a in zip(now, reached, strict=True)]),
