@@ -266,9 +266,12 @@ def fit_floats(
 ) -> tuple[list[float], Loads, list[bool], bool]:
     """:func:`~ikgame.control.dynamics.fit_drive` over lists: the accelerations, the loads,
     which joints are saturated, and whether the loads are those of the motion."""
-    full = _affine(bias, push, 1.0)
-    if all(abs(t) <= lim for t, lim in zip(full[0], limits, strict=True)):
-        return wanted, full, [False] * len(limits), True
+    # bias + push, the torques first: the forces are needed only when those fit.
+    torques = [b + p for b, p in zip(bias[0], push[0], strict=True)]
+    if all(abs(t) <= lim for t, lim in zip(torques, limits, strict=True)):
+        fx = [b + p for b, p in zip(bias[1], push[1], strict=True)]
+        fy = [b + p for b, p in zip(bias[2], push[2], strict=True)]
+        return wanted, (torques, fx, fy), [False] * len(limits), True
     scale, binding = _largest_factor(bias[0], push[0], limits)
     if head is not None and scale is not None and binding < len(limits) - 1:
         near = head(binding)

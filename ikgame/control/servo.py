@@ -244,59 +244,67 @@ class Servo:
         errors, now = error.tolist(), velocities.tolist()
         hold, swing, inertia = pose.rest((float(gravity[0]), float(gravity[1])), now)
         held = hold[0]
-        saturated, before = self._saturated, self._velocities
-        carried, stalled = self._carried, self._stalled
-        n = len(errors)
-        # Each step as in command, with numpy's maximum and minimum written out (same floats).
-        up, down, closing = [0.0] * n, [0.0] * n, [0.0] * n
+        # Each step as in command, with numpy's maximum, minimum and sign written out (the same
+        # floats: a sign times a speed is the speed, its negation, zero or NaN).
+        up, down, closing, carried, stalled = [], [], [], [], []
         stop_in = math.inf
-        for j in range(n):
-            lim, e, v, i = limits[j], errors[j], now[j], inertia[j]
-            u, d = lim - held[j], lim + held[j]
+        floor_share, brake_share, stall_speed = BRAKE_FLOOR, BRAKE_SHARE, STALL_SPEED
+        for lim, e, v, i, h, top, saturated, before, was_carried, was_stalled in zip(
+            limits,
+            errors,
+            now,
+            inertia,
+            held,
+            speeds,
+            self._saturated,
+            self._velocities,
+            self._carried,
+            self._stalled,
+            strict=True,
+        ):
+            u, d = lim - h, lim + h
             u = (0.0 if 0.0 > u else u) / i
             d = (0.0 if 0.0 > d else d) / i
-            up[j], down[j] = u, d
+            up.append(u)
+            down.append(d)
             against = d if e > 0.0 else u
-            floor = BRAKE_FLOOR * lim / i
-            brake = BRAKE_SHARE * (floor if floor > against else against)
-            slow = abs(before[j])
-            if (
-                saturated[j]
-                and v * e < 0.0
-                and abs(v) > (STALL_SPEED if STALL_SPEED > slow else slow)
-            ):
-                carried[j] += dt
+            floor = floor_share * lim / i
+            brake = brake_share * (floor if floor > against else against)
+            slow = abs(before)
+            if saturated and v * e < 0.0 and abs(v) > (stall_speed if stall_speed > slow else slow):
+                was_carried += dt
             else:
-                carried[j] = 0.0
-            stalled[j] = stalled[j] or carried[j] >= STALL_TIME
-            size = 0.0 if stalled[j] else abs(e)
-            speed, by_gain = speeds[j], gain * size
-            speed = by_gain if by_gain < speed else speed
+                was_carried = 0.0
+            carried.append(was_carried)
+            is_stalled = was_stalled or was_carried >= STALL_TIME
+            stalled.append(is_stalled)
+            size = 0.0 if is_stalled else abs(e)
+            by_gain = gain * size
+            speed = by_gain if by_gain < top else top
             by_brake = math.sqrt(2.0 * brake * size)
             speed = by_brake if by_brake < speed else speed
-            c = _sign(e) * speed
-            closing[j] = c
+            c = speed if e > 0.0 else -speed if e < 0.0 else 0.0 * speed if e == 0.0 else e
+            closing.append(c)
             if abs(c) > 1e-9:
                 stop = 2.0 * abs(e) / abs(c)
                 stop_in = stop if stop < stop_in else stop_in
-        self._velocities = now
+        self._carried, self._stalled, self._velocities = carried, stalled, now
         if stop_in != math.inf:
             halt = pose.loads(alpha=tree.along([-c / stop_in for c in closing]))[0]
             factor = _fit_floats(halt, held, limits, BRAKE_SHARE)
             closing = [c * factor for c in closing]
         if goal_rates is not None:
             closing = [c + g for c, g in zip(closing, goal_rates.tolist(), strict=True)]
-        target = [min(max(t, -s), s) for t, s in zip(closing, speeds, strict=True)]
+        target = [(-s if -s > t else t) for t, s in zip(closing, speeds, strict=True)]
+        target = [(s if s < t else t) for t, s in zip(target, speeds, strict=True)]
         spin = pose.loads(omega=tree.along(target))[0]
         factor = _fit_floats(spin, held, limits, 1.0 - BRAKE_SHARE)
-        accelerations = [0.0] * n
-        for j in range(n):
-            # min(max(t, v - d dt), v + u dt) as Python's min and max take it.
-            v, wanted = now[j], target[j] * factor
-            slowest, fastest = v - down[j] * dt, v + up[j] * dt
+        accelerations = []
+        for t, v, d, u in zip(target, now, down, up, strict=True):
+            wanted, slowest, fastest = t * factor, v - d * dt, v + u * dt
             wanted = slowest if slowest > wanted else wanted
             wanted = fastest if fastest < wanted else wanted
-            accelerations[j] = (wanted - v) / dt
+            accelerations.append((wanted - v) / dt)
         push = pose.loads(alpha=tree.along(accelerations))
         bias = (
             [a + b for a, b in zip(hold[0], swing[0], strict=True)],
@@ -321,7 +329,10 @@ class Servo:
             torques=np.array(torques),
             forces=np.array((loads[1], loads[2])).T,
             budgets=np.array(
-                [max(lim - abs(t), 0.0) for lim, t in zip(limits, torques, strict=True)]
+                [
+                    0.0 if 0.0 > (left := lim - abs(t)) else left
+                    for lim, t in zip(limits, torques, strict=True)
+                ]
             ),
         )
 
@@ -335,7 +346,9 @@ def _fit_floats(loads: list[float], hold: list[float], limits: list[float], shar
     """:func:`_fit` of ``loads`` within :meth:`Servo._room` over floats."""
     factor = math.inf
     for load, held, lim in zip(loads, hold, limits, strict=True):
-        left, floor = lim - _sign(load) * held, BRAKE_FLOOR * lim
+        # _sign(load) * held, with the sign's product written out where it is exact.
+        signed = held if load > 0.0 else -held if load < 0.0 else _sign(load) * held
+        left, floor = lim - signed, BRAKE_FLOOR * lim
         room = share * (floor if floor > left else left)
         need = abs(load)
         if need > room:

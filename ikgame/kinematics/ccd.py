@@ -14,7 +14,7 @@ from typing import Final
 
 import numpy as np
 
-from ikgame.kinematics._floats import FloatChain
+from ikgame.kinematics._floats import FloatChain, float_angles, float_point
 from ikgame.kinematics.skeleton import Skeleton, check_angles, check_point
 from ikgame.kinematics.solver import Solution, SolveStatus
 
@@ -238,10 +238,10 @@ def solve_ccd(
     """
     if max_iterations < 1:
         raise ValueError(f"max_iterations must be >= 1, got {max_iterations}")
-    tx, ty = (float(v) for v in check_point(target))
+    tx, ty = float_point(target)
     tolerance = _check_arrival(tolerance)
     chain = _Chain(skeleton)
-    current = skeleton.clamp(check_angles(angles, skeleton.count)).tolist()
+    current = chain.clamp(float_angles(angles, skeleton.count))
     error_sqr = chain.error_sqr(current, tx, ty)
     status = SolveStatus.SUCCESS if error_sqr <= tolerance * tolerance else SolveStatus.PROCESSING
     used = 0
