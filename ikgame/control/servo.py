@@ -107,6 +107,8 @@ class Servo:
         self._velocities = [0.0] * count
         self._carried = [0.0] * count
         self._floats = FloatInertia(inertia) if inertia.count <= FLOAT_LINKS else None
+        if self._floats is not None:
+            self._quiet = _Quiet(self._floats, self.max_torque.tolist())
         self._sections = inertia.count > SECTION_LINKS
         self._limits = self.max_torque.tolist()
         self._speeds = self.max_speed.tolist()
@@ -289,16 +291,23 @@ class Servo:
                 stop = 2.0 * abs(e) / abs(c)
                 stop_in = stop if stop < stop_in else stop_in
         self._carried, self._stalled, self._velocities = carried, stalled, now
+        # The loads of braking and of spinning are evaluated only when a bound on them (see
+        # _Quiet) leaves any joint short of room: otherwise their factor is 1, exactly.
+        quiet = self._quiet
         if stop_in != math.inf:
-            halt = pose.loads(alpha=tree.along([-c / stop_in for c in closing]))[0]
-            factor = _fit_floats(halt, held, limits, BRAKE_SHARE)
-            closing = [c * factor for c in closing]
+            braking = [-c / stop_in for c in closing]
+            if not quiet.brakes(braking):
+                halt = pose.loads(alpha=tree.along(braking))[0]
+                factor = _fit_floats(halt, held, limits, BRAKE_SHARE)
+                closing = [c * factor for c in closing]
         if goal_rates is not None:
             closing = [c + g for c, g in zip(closing, goal_rates.tolist(), strict=True)]
         target = [(-s if -s > t else t) for t, s in zip(closing, speeds, strict=True)]
         target = [(s if s < t else t) for t, s in zip(target, speeds, strict=True)]
-        spin = pose.loads(omega=tree.along(target))[0]
-        factor = _fit_floats(spin, held, limits, 1.0 - BRAKE_SHARE)
+        factor = 1.0
+        if not quiet.spins(target):
+            spin = pose.loads(omega=tree.along(target))[0]
+            factor = _fit_floats(spin, held, limits, 1.0 - BRAKE_SHARE)
         accelerations = []
         for t, v, d, u in zip(target, now, down, up, strict=True):
             wanted, slowest, fastest = t * factor, v - d * dt, v + u * dt
@@ -335,6 +344,44 @@ class Servo:
                 ]
             ),
         )
+
+
+class _Quiet:
+    """Rates and accelerations too small for their loads to need room a joint lacks.
+
+    Per link, the centre accelerates at most at the sum over all links of ``omega^2 L`` (or
+    ``|alpha| L``), and each world rate is at most the sum ``S`` of the joints' absolute rates.
+    So joint ``i``'s torque is at most ``A P_i`` plus, for accelerations, ``S`` times the
+    moments beyond it, where ``A`` is ``S^2`` (or ``S``) times the total length and ``P_i`` sums
+    ``L_k`` times the mass beyond ``k`` over the links beyond ``i``. The servo gives each joint
+    at least its share of the floor of its torque limit: a bound within half of that (a
+    margin far beyond rounding) means no joint is short, and the factor is 1 without the loads.
+    """
+
+    def __init__(self, tree: FloatInertia, limits: list[float]) -> None:
+        reach = math.fsum(tree.lengths)
+        lever = tree.beyond(
+            [length * m for length, m in zip(tree.lengths, tree.mass_beyond, strict=True)]
+        )
+        self._spin = self._brake = math.inf
+        for p, moments, limit in zip(lever, tree.moment_beyond, limits, strict=True):
+            floor = BRAKE_FLOOR * limit
+            spin, brake = 2.0 * reach * p, 2.0 * (reach * p + moments)
+            if spin > 0.0:
+                self._spin = min(self._spin, (1.0 - BRAKE_SHARE) * floor / spin)
+            if brake > 0.0:
+                self._brake = min(self._brake, BRAKE_SHARE * floor / brake)
+
+    def spins(self, rates: list[float]) -> bool:
+        """True when the loads of joint ``rates`` alone (rad/s, child - parent) surely fit every
+        joint's room for them; False when they might not."""
+        total = math.fsum(map(abs, rates))
+        return total * total <= self._spin
+
+    def brakes(self, accelerations: list[float]) -> bool:
+        """True when the loads of joint ``accelerations`` alone (rad/s^2) surely fit every
+        joint's room for braking; False when they might not."""
+        return math.fsum(map(abs, accelerations)) <= self._brake
 
 
 def _sign(value: float) -> float:

@@ -236,9 +236,10 @@ class World:
         return state[rows.links, 2] - state[rows.parents, 2]
 
     @property
-    def gravity(self) -> np.ndarray:
-        """(2,) gravity now, px/s^2."""
-        return np.array(self.space.gravity)
+    def gravity(self) -> tuple[float, float]:
+        """Gravity now, ``(x, y)`` px/s^2."""
+        gravity = self.space.gravity
+        return gravity.x, gravity.y
 
     def joint_velocities(self) -> np.ndarray:
         """(n,) relative angular velocity of each joint (child - parent), rad/s."""
@@ -382,17 +383,18 @@ class World:
     def motor_torques(self) -> np.ndarray:
         """(n,) magnitude of the torque each joint applied during the last step: feed-forward
         plus its motor's correction (the motor's impulse / dt)."""
+        return np.array(self._motor_torques())
+
+    def _motor_torques(self) -> list[float]:
         dt = self.last_dt
-        return np.array(
-            [
-                abs(f + _IMPULSE(m) / dt)
-                for f, m in zip(self._feed_forward, self.motors, strict=True)
-            ]
-        )
+        return [
+            abs(f + _IMPULSE(m) / dt) for f, m in zip(self._feed_forward, self.motors, strict=True)
+        ]
 
     def torque_limited(self) -> np.ndarray:
         """(n,) bool: which joints were at their torque limit during the last step."""
-        return self.motor_torques() >= self.max_torque * (1.0 - 1e-6)
+        near = (self.max_torque * (1.0 - 1e-6)).tolist()
+        return np.array([t >= n for t, n in zip(self._motor_torques(), near, strict=True)])
 
     def touching(self) -> bool:
         """True when any link of the chain is in contact with an obstacle or a prop."""

@@ -5,8 +5,9 @@ import math
 import numpy as np
 import pytest
 
+from ikgame.control._floats import FloatInertia
 from ikgame.control.dynamics import ChainInertia
-from ikgame.control.servo import Servo
+from ikgame.control.servo import BRAKE_FLOOR, Servo
 from ikgame.kinematics import forward_kinematics
 from ikgame.level.model import Level
 from ikgame.physics.world import build_skeleton
@@ -160,3 +161,37 @@ def test_two_hundred_links_swing_over_to_the_other_side_within_their_limits():
         worst = max(worst, float(np.max(np.abs(sim.joint_angles()))) - limit)
     assert [outcome.reached for outcome in sim.script.outcomes] == [True, True]
     assert math.degrees(worst) < 2.0
+
+
+@pytest.mark.parametrize("parents", [None, [-1, 0, 0, 2, -1, 4]], ids=["chain", "tree"])
+def test_loads_the_servo_skips_are_within_half_the_smallest_room(parents):
+    # The servo leaves out the loads of braking and spinning when a bound says they fit: that
+    # bound must hold (here with the room's floor halved, the margin it keeps), for any pose.
+    n = 6
+    rng = np.random.default_rng(7)
+    lengths, masses = rng.uniform(10, 60, n), rng.uniform(0.2, 2.0, n)
+    inertia = ChainInertia(
+        lengths,
+        masses,
+        masses * lengths**2 / 12,
+        parents=None if parents is None else np.array(parents),
+    )
+    limits = rng.uniform(2e4, 2e5, n)
+    servo = Servo(inertia, max_torque=limits, max_speed=np.full(n, 3.0), gain=12.0)
+    quiet, floats = servo._quiet, FloatInertia(inertia)
+    room = 0.5 * BRAKE_FLOOR * limits  # the least either share gives
+    skipped = [0, 0]
+    for _ in range(400):
+        pose = floats.pose(rng.uniform(-3, 3, n))
+        scale = 10.0 ** rng.uniform(-3, 1)
+        rates = (rng.normal(size=n) * scale).tolist()
+        if quiet.spins(rates):
+            skipped[0] += 1
+            torques = np.array(pose.loads(omega=floats.along(rates))[0])
+            assert np.all(np.abs(torques) <= room / 2)
+        accelerations = (rng.normal(size=n) * scale).tolist()
+        if quiet.brakes(accelerations):
+            skipped[1] += 1
+            torques = np.array(pose.loads(alpha=floats.along(accelerations))[0])
+            assert np.all(np.abs(torques) <= room / 2)
+    assert min(skipped) > 20 and max(skipped) < 380  # both ways taken
