@@ -134,13 +134,16 @@ class FloatPose:
         self, gravity: tuple[float, float], rates: list[float]
     ) -> tuple[Loads, Loads, list[float]]:
         """What the servo asks of the pose before it knows the motion it wants: the loads of
-        ``gravity`` alone (px/s^2), those of the swing at joint ``rates`` alone (rad/s, child -
-        parent), and :meth:`inertia`."""
-        return (
-            self.loads(gravity=gravity),
-            self.loads(omega=self.inertia_of.along(rates)),
-            self.inertia(),
+        ``gravity`` alone (px/s^2); those plus the loads of the swing at joint ``rates`` alone
+        (rad/s, child - parent), each added to each; and :meth:`inertia`."""
+        hold = self.loads(gravity=gravity)
+        swing = self.loads(omega=self.inertia_of.along(rates))
+        coasting = (
+            [a + b for a, b in zip(hold[0], swing[0], strict=True)],
+            [a + b for a, b in zip(hold[1], swing[1], strict=True)],
+            [a + b for a, b in zip(hold[2], swing[2], strict=True)],
         )
+        return hold, coasting, self.inertia()
 
 
 class _ChainPose(FloatPose):
@@ -228,7 +231,8 @@ class _ChainPose(FloatPose):
             jx[i], jy[i] = px, py
             cx, cy = px + hx[i], py + hy[i]
             mcx[i], mcy[i], mcc[i] = m * cx, m * cy, m * (cx * cx + cy * cy)
-        # Back: gravity's loads (every centre accelerates at -g), the swing's, the inertia.
+        # Back: gravity's loads (every centre accelerates at -g), those plus the swing's, the
+        # inertia.
         gx, gy = 0.0 - gravity[0], 0.0 - gravity[1]
         hold_t, hold_x, hold_y = [0.0] * n, [0.0] * n, [0.0] * n
         swing_t, inertia = [0.0] * n, [0.0] * n
@@ -246,7 +250,7 @@ class _ChainPose(FloatPose):
             ssx += swing_x[i]
             ssy += swing_y[i]
             s_torque += h_x * (ssy + sby) - h_y * (ssx + sbx)
-            swing_t[i], swing_x[i], swing_y[i] = s_torque, ssx, ssy
+            swing_t[i], swing_x[i], swing_y[i] = g_torque + s_torque, gsx + ssx, gsy + ssy
             sbx, sby = ssx, ssy
             first_x += mcx[i]
             first_y += mcy[i]

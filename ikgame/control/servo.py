@@ -244,7 +244,7 @@ class Servo:
         pose = tree.pose(world_angles)
         limits, speeds, gain = self._limits, self._speeds, self.gain
         errors, now = error.tolist(), velocities.tolist()
-        hold, swing, inertia = pose.rest((float(gravity[0]), float(gravity[1])), now)
+        hold, coasting, inertia = pose.rest((float(gravity[0]), float(gravity[1])), now)
         held = hold[0]
         # Each step as in command, with numpy's maximum, minimum and sign written out (the same
         # floats: a sign times a speed is the speed, its negation, zero or NaN).
@@ -315,11 +315,6 @@ class Servo:
             wanted = fastest if fastest < wanted else wanted
             accelerations.append((wanted - v) / dt)
         push = pose.loads(alpha=tree.along(accelerations))
-        bias = (
-            [a + b for a, b in zip(hold[0], swing[0], strict=True)],
-            [a + b for a, b in zip(hold[1], swing[1], strict=True)],
-            [a + b for a, b in zip(hold[2], swing[2], strict=True)],
-        )
 
         def near(k: int) -> Loads:
             return pose.loads(
@@ -327,7 +322,9 @@ class Servo:
             )
 
         head = near if self._sections else None
-        reached, loads, saturated, consistent = fit_floats(bias, push, accelerations, limits, head)
+        reached, loads, saturated, consistent = fit_floats(
+            coasting, push, accelerations, limits, head
+        )
         if not consistent:
             # See command: gravity and the wanted acceleration alone, pymunk's pivots the rest.
             reached, loads, saturated, _ = fit_floats(hold, push, accelerations, limits, head)

@@ -220,6 +220,9 @@ class World:
         self._reads = pymunk.batch.Buffer()
         self._rows: _Rows | None = None
         self._link_angles: np.ndarray | None = None
+        self._effector_ends = [
+            (self.bodies[i], (self._halves[i], 0.0)) for i in self.effector_links.tolist()
+        ]
 
     @property
     def count(self) -> int:
@@ -292,7 +295,9 @@ class World:
 
     def effector_positions(self) -> np.ndarray:
         """(k, 2) world position of each end effector, px, in :attr:`effector_links` order."""
-        return self.link_ends(self.effector_links)
+        return np.array(
+            [body.local_to_world(end) for body, end in self._effector_ends], dtype=float
+        )
 
     def link_ends(self, links: np.ndarray) -> np.ndarray:
         """(m, 2) world position of the far end of each of ``links`` (indices), px."""
