@@ -35,6 +35,10 @@ than the default 10 to stay stiff under gravity, and each sweep of the solver ca
 correction one joint further, so a chain of more links than this needs as many sweeps for its
 far end to hear of its base (200 links at 60 rocked at rest by 1 to 6 px)."""
 
+FLOAT_LINKS: Final = 30
+"""Chains up to this many links get their loads written link by link over Python floats,
+longer ones and trees over numpy arrays: the same numbers either way, whichever is faster."""
+
 DIVERGENCE_LIMIT: Final = 1.0e6
 """A body farther than this from the origin (px), or turned this many radians, has blown up."""
 
@@ -351,9 +355,9 @@ class World:
         # Each body takes its joint's loads and the reactions of the joints at its end, all
         # acting at the link's ends, so the pivot forces turn it about its centre too. Bodies
         # other than links get no load: pymunk clears applied loads after every step.
-        if rows.consecutive:
-            # A chain, link by link over floats (numpy's calls cost more than a short chain's
-            # sums): the same operations as the arrays of a tree's below.
+        if rows.consecutive and self.count <= FLOAT_LINKS:
+            # A short chain, link by link over floats (numpy's calls cost more than its sums):
+            # the same operations as the arrays below.
             cos, sin = np.cos(angles).tolist(), np.sin(angles).tolist()
             t, f, halves = torques.tolist(), forces.tolist(), self._halves
             n = len(t)
@@ -369,6 +373,16 @@ class World:
                 hx, hy = halves[i] * cos[i], halves[i] * sin[i]
                 body[3 * i : 3 * i + 3] = load_x, load_y, torque - (hx * pair_y - hy * pair_x)
             loads[rows.links].reshape(-1)[:] = body  # a view: the links are consecutive rows
+        elif rows.consecutive:
+            hx, hy = self._halves_array * np.cos(angles), self._halves_array * np.sin(angles)
+            pair = forces.copy()
+            pair[:-1] += forces[1:]
+            body = loads[rows.links]  # a view: the links are consecutive rows
+            body[:, :2] = forces
+            body[:-1, :2] -= forces[1:]
+            body[:, 2] = torques
+            body[:-1, 2] -= torques[1:]
+            body[:, 2] -= hx * pair[:, 1] - hy * pair[:, 0]
         else:
             hx, hy = self._halves_array * np.cos(angles), self._halves_array * np.sin(angles)
             pair = forces.copy()
