@@ -415,7 +415,8 @@ class Simulation:
             return errors, float(np.nanmax(errors))
         if target is None:
             return errors, math.nan
-        error = float(np.hypot(*(self._reached[0] - target)))
+        (x, y), (tx, ty) = self._reached[0].tolist(), target.tolist()
+        error = float(np.hypot(x - tx, y - ty))
         errors[0] = error
         return errors, error
 
