@@ -402,18 +402,17 @@ class World:
     def motor_torques(self) -> np.ndarray:
         """(n,) magnitude of the torque each joint applied during the last step: feed-forward
         plus its motor's correction (the motor's impulse / dt)."""
-        return np.array(self._motor_torques())
-
-    def _motor_torques(self) -> list[float]:
         dt = self.last_dt
-        return [
-            abs(f + _IMPULSE(m) / dt) for f, m in zip(self._feed_forward, self.motors, strict=True)
-        ]
+        return np.array(
+            [
+                abs(f + _IMPULSE(m) / dt)
+                for f, m in zip(self._feed_forward, self.motors, strict=True)
+            ]
+        )
 
     def torque_limited(self) -> np.ndarray:
         """(n,) bool: which joints were at their torque limit during the last step."""
-        near = (self.max_torque * (1.0 - 1e-6)).tolist()
-        return np.array([t >= n for t, n in zip(self._motor_torques(), near, strict=True)])
+        return self.motor_torques() >= self.max_torque * (1.0 - 1e-6)
 
     def touching(self) -> bool:
         """True when any link of the chain is in contact with an obstacle or a prop."""
