@@ -96,18 +96,23 @@ def test_long_chain_timing_does_not_depend_on_the_tick_rate(tick_rate):
     assert math.isfinite(reference)
 
 
-@pytest.mark.parametrize("sections", [False, True], ids=["one-factor", "sections"])
-@pytest.mark.parametrize("parents", [None, [-1, 0, 0, 2, -1, 4]], ids=["chain", "tree"])
-def test_the_float_servo_commands_what_the_numpy_servo_does(parents, sections):
-    n = 6
-    rng = np.random.default_rng(11)
+def _random_links(rng, n, parents):
+    """``n`` links of random lengths and masses, as rods, in a chain or on ``parents``."""
     lengths, masses = rng.uniform(10, 60, n), rng.uniform(0.2, 2.0, n)
-    inertia = ChainInertia(
+    return ChainInertia(
         lengths,
         masses,
         masses * lengths**2 / 12,
         parents=None if parents is None else np.array(parents),
     )
+
+
+@pytest.mark.parametrize("sections", [False, True], ids=["one-factor", "sections"])
+@pytest.mark.parametrize("parents", [None, [-1, 0, 0, 2, -1, 4]], ids=["chain", "tree"])
+def test_the_float_servo_commands_what_the_numpy_servo_does(parents, sections):
+    n = 6
+    rng = np.random.default_rng(11)
+    inertia = _random_links(rng, n, parents)
     limits = dict(max_torque=rng.uniform(2e4, 2e5, n), max_speed=np.full(n, 3.0), gain=12.0)
     fast, slow = Servo(inertia, **limits), Servo(inertia, **limits)
     slow._floats = None  # the numpy path, as chains longer than FLOAT_LINKS take
@@ -169,13 +174,7 @@ def test_loads_the_servo_skips_are_within_half_the_smallest_room(parents):
     # bound must hold (here with the room's floor halved, the margin it keeps), for any pose.
     n = 6
     rng = np.random.default_rng(7)
-    lengths, masses = rng.uniform(10, 60, n), rng.uniform(0.2, 2.0, n)
-    inertia = ChainInertia(
-        lengths,
-        masses,
-        masses * lengths**2 / 12,
-        parents=None if parents is None else np.array(parents),
-    )
+    inertia = _random_links(rng, n, parents)
     limits = rng.uniform(2e4, 2e5, n)
     servo = Servo(inertia, max_torque=limits, max_speed=np.full(n, 3.0), gain=12.0)
     quiet, floats = servo._quiet, FloatInertia(inertia)
