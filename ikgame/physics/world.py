@@ -35,6 +35,10 @@ than the default 10 to stay stiff under gravity, and each sweep of the solver ca
 correction one joint further, so a chain of more links than this needs as many sweeps for its
 far end to hear of its base (200 links at 60 rocked at rest by 1 to 6 px)."""
 
+FLOAT_LINKS: Final = 30
+"""Chains up to this many links get their loads written link by link over Python floats,
+longer ones and trees over numpy arrays: the same numbers either way, whichever is faster."""
+
 DIVERGENCE_LIMIT: Final = 1.0e6
 """A body farther than this from the origin (px), or turned this many radians, has blown up."""
 
@@ -216,9 +220,13 @@ class World:
         """(n,) moment of inertia of each link about its centre, mass px^2."""
         self._lengths = 2.0 * np.array(self._halves, dtype=float)
         self._halves_array = 0.5 * self._lengths
-        self._feed_forward = np.zeros(self.count)
+        self._feed_forward = [0.0] * self.count
         self._reads = pymunk.batch.Buffer()
         self._rows: _Rows | None = None
+        self._link_angles: np.ndarray | None = None
+        self._effector_ends = [
+            (self.bodies[i], (self._halves[i], 0.0)) for i in self.effector_links.tolist()
+        ]
 
     @property
     def count(self) -> int:
@@ -235,9 +243,10 @@ class World:
         return state[rows.links, 2] - state[rows.parents, 2]
 
     @property
-    def gravity(self) -> np.ndarray:
-        """(2,) gravity now, px/s^2."""
-        return np.array(self.space.gravity)
+    def gravity(self) -> tuple[float, float]:
+        """Gravity now, ``(x, y)`` px/s^2."""
+        gravity = self.space.gravity
+        return gravity.x, gravity.y
 
     def joint_velocities(self) -> np.ndarray:
         """(n,) relative angular velocity of each joint (child - parent), rad/s."""
@@ -255,6 +264,9 @@ class World:
         """
         state, rows = self._state()
         links, parents = state[rows.links], state[rows.parents]
+        # The tick's drive applies its loads along the links as read here (a copy: the read's
+        # buffer is reused).
+        self._link_angles = links[:, 2].copy()
         return links[:, 2] - parents[:, 2], links[:, 3] - parents[:, 3]
 
     def _state(self) -> tuple[np.ndarray, _Rows]:
@@ -287,7 +299,9 @@ class World:
 
     def effector_positions(self) -> np.ndarray:
         """(k, 2) world position of each end effector, px, in :attr:`effector_links` order."""
-        return self.link_ends(self.effector_links)
+        return np.array(
+            [body.local_to_world(end) for body, end in self._effector_ends], dtype=float
+        )
 
     def link_ends(self, links: np.ndarray) -> np.ndarray:
         """(m, 2) world position of the far end of each of ``links`` (indices), px."""
@@ -317,7 +331,9 @@ class World:
         them anyway, so giving them here only saves the constraint solver from finding them.
         The base body is kinematic and takes the reactions of joint 0. Each motor then holds
         its ``rates`` entry (rad/s) with at most its ``budgets`` entry of torque, so that a
-        joint's feed-forward torque and its motor's never add up to more than its limit.
+        joint's feed-forward torque and its motor's never add up to more than its limit. The
+        loads act along the links as :meth:`joint_state` last read them since the last step
+        (the tick reads the bodies once), else as they are now.
 
         >>> from ikgame.level.model import Level
         >>> world = World(Level.model_validate({"level": {"name": "x", "duration": 1.0},
@@ -330,15 +346,36 @@ class World:
         >>> round(float(world.joint_velocities()[0]), 6)
         4.0
         """
-        state, rows = self._state()
-        angles = state[rows.links, 2]
-        hx, hy = self._halves_array * np.cos(angles), self._halves_array * np.sin(angles)
+        angles = self._link_angles
+        if angles is None:
+            state, rows = self._state()
+            angles = state[rows.links, 2]
+        rows = self._rows
+        loads = rows.loads
         # Each body takes its joint's loads and the reactions of the joints at its end, all
         # acting at the link's ends, so the pivot forces turn it about its centre too. Bodies
         # other than links get no load: pymunk clears applied loads after every step.
-        pair = forces.copy()
-        loads = rows.loads
-        if rows.consecutive:
+        if rows.consecutive and self.count <= FLOAT_LINKS:
+            # A short chain, link by link over floats (numpy's calls cost more than its sums):
+            # the same operations as the arrays below.
+            cos, sin = np.cos(angles).tolist(), np.sin(angles).tolist()
+            t, f, halves = torques.tolist(), forces.tolist(), self._halves
+            n = len(t)
+            body = [0.0] * (3 * n)
+            for i in range(n):
+                fx, fy = f[i]
+                pair_x, pair_y, load_x, load_y, torque = fx, fy, fx, fy, t[i]
+                if i + 1 < n:
+                    next_x, next_y = f[i + 1]
+                    pair_x, pair_y = fx + next_x, fy + next_y
+                    load_x, load_y = fx - next_x, fy - next_y
+                    torque = torque - t[i + 1]
+                hx, hy = halves[i] * cos[i], halves[i] * sin[i]
+                body[3 * i : 3 * i + 3] = load_x, load_y, torque - (hx * pair_y - hy * pair_x)
+            loads[rows.links].reshape(-1)[:] = body  # a view: the links are consecutive rows
+        elif rows.consecutive:
+            hx, hy = self._halves_array * np.cos(angles), self._halves_array * np.sin(angles)
+            pair = forces.copy()
             pair[:-1] += forces[1:]
             body = loads[rows.links]  # a view: the links are consecutive rows
             body[:, :2] = forces
@@ -347,6 +384,8 @@ class World:
             body[:-1, 2] -= torques[1:]
             body[:, 2] -= hx * pair[:, 1] - hy * pair[:, 0]
         else:
+            hx, hy = self._halves_array * np.cos(angles), self._halves_array * np.sin(angles)
+            pair = forces.copy()
             beyond_forces, beyond_torques = np.zeros((self.count, 2)), np.zeros(self.count)
             np.add.at(beyond_forces, rows.hanging_parents, forces[rows.hanging])
             np.add.at(beyond_torques, rows.hanging_parents, torques[rows.hanging])
@@ -358,14 +397,18 @@ class World:
             # SimpleMotor drives (b.w - a.w) toward -rate.
             _SET_RATE(motor, -rate)
             _SET_MAX_FORCE(motor, budget)
-        self._feed_forward = np.array(torques, dtype=float)
+        self._feed_forward = np.asarray(torques, dtype=float).tolist()
 
     def motor_torques(self) -> np.ndarray:
         """(n,) magnitude of the torque each joint applied during the last step: feed-forward
         plus its motor's correction (the motor's impulse / dt)."""
         dt = self.last_dt
-        motor = np.array([_IMPULSE(m) for m in self.motors]) / dt
-        return np.abs(self._feed_forward + motor)
+        return np.array(
+            [
+                abs(f + _IMPULSE(m) / dt)
+                for f, m in zip(self._feed_forward, self.motors, strict=True)
+            ]
+        )
 
     def torque_limited(self) -> np.ndarray:
         """(n,) bool: which joints were at their torque limit during the last step."""
@@ -440,6 +483,7 @@ class World:
     def step(self, dt: float) -> None:
         """Advance the world by ``dt`` seconds."""
         self.last_dt = dt
+        self._link_angles = None
         move = self._base_move
         if move is None:
             self.space.step(dt)

@@ -117,3 +117,18 @@ def test_a_prop_blowing_up_counts_as_divergence():
     assert not world.diverged()
     world.prop_bodies[0].position = (math.inf, 0.0)
     assert world.diverged()
+
+
+def test_a_short_chain_gets_the_loads_over_floats_that_numpy_gives(monkeypatch):
+    world = World(_level([{"length": 40.0, "repeat": 6}], gravity=(0.0, -900.0)))
+    rng = np.random.default_rng(4)
+    for _ in range(5):
+        world.step(1 / 240)
+        world.joint_state()
+        torques, forces = rng.normal(size=6) * 1e4, rng.normal(size=(6, 2)) * 1e3
+        world.drive(np.zeros(6), torques, forces, np.full(6, 1e5))
+        floats = world._rows.loads.copy()
+        monkeypatch.setattr("ikgame.physics.world.FLOAT_LINKS", 0)
+        world.drive(np.zeros(6), torques, forces, np.full(6, 1e5))
+        monkeypatch.undo()
+        assert np.any(floats) and np.array_equal(floats, world._rows.loads)
