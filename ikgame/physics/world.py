@@ -3,7 +3,8 @@ dynamic props.
 
 Each link is a dynamic body centred on the link, with a thick segment shape. Consecutive links
 are pinned by a ``PivotJoint``, driven by a ``SimpleMotor`` whose ``max_force`` is the joint's
-torque limit, and held in range by a ``RotaryLimitJoint`` where the level sets limits. Link 0
+torque limit, and held in range by a ``RotaryLimitJoint`` where the level sets limits (braced, so
+that a joint knocked toward a stop halts within a step short of it, not a step past it). Link 0
 hangs off a kinematic base body, so a script can move the base smoothly (:meth:`World.move_base`).
 Links of one chain never collide with each other; they do collide with obstacles and props, and
 props collide with everything.
@@ -56,6 +57,9 @@ _IMPULSE: Final = pymunk.Constraint.impulse.fget
 """The motor setters and getter themselves, called per motor each tick without pymunk's
 attribute hook."""
 
+_BRACE_RAD: Final = 1e-9
+"""How far beyond a braced joint's angle (back into its range) its stop is set, radians: pymunk
+acts only on a joint strictly past its bound, and pushes back from this little unnoticeably."""
 _CHAIN_GROUP: Final = 1
 _LINK_TYPE: Final = 1
 """The collision type of every link's shape."""
@@ -227,6 +231,7 @@ class World:
         self._effector_ends = [
             (self.bodies[i], (self._halves[i], 0.0)) for i in self.effector_links.tolist()
         ]
+        self._stops = _Stops(self.limit_joints, self.max_speed)
 
     @property
     def count(self) -> int:
@@ -486,7 +491,7 @@ class World:
         self._link_angles = None
         move = self._base_move
         if move is None:
-            self.space.step(dt)
+            self._step_space(dt)
             return
         move.elapsed += dt
         wanted, wanted_angle, done = move.at(move.elapsed)
@@ -494,7 +499,7 @@ class World:
         turning = move.end_angle != move.start_angle
         if turning:
             self.base_body.angular_velocity = (wanted_angle - self.base_body.angle) / dt
-        self.space.step(dt)
+        self._step_space(dt)
         if done:
             self.base_body.velocity = (0.0, 0.0)
             self.base_body.position = tuple(move.end)
@@ -508,6 +513,13 @@ class World:
             self.skeleton = self.skeleton.moved_to(
                 self.base_body.position, self.base_body.angle if turning else None
             )
+
+    def _step_space(self, dt: float) -> None:
+        """Step the space by ``dt`` s with the joint stops braced (see :class:`_Stops`)."""
+        stops = self._stops
+        braced = stops.brace(*self.joint_state(), dt) if stops.joints else []
+        self.space.step(dt)
+        stops.release(braced)
 
     def diverged(self) -> bool:
         """True when any link's, prop's or the base's pose is NaN, infinite, or absurdly far.
@@ -582,6 +594,61 @@ class _Rows:
         """Force x, y and torque per row, written to the space each tick."""
         self.writes = pymunk.batch.Buffer()
         self.writes.set_float_buf(self.loads)
+
+
+class _Stops:
+    """The joints' limits, braced against a joint knocked toward one.
+
+    pymunk moves every body by its velocity first and then solves the constraints for the
+    velocities of the next step, and a ``RotaryLimitJoint`` acts only on a joint already past
+    its limit. So the velocity a step leaves a joint with can carry it past its stop by up to
+    one step's travel before the limit notices. A joint its motor turns moves at most at its
+    speed limit, which keeps that small (and the motor drives it on into the stop anyway); a
+    joint knocked faster (a hand struck back by the floor at 1000 deg/s, 4 deg a tick at 240
+    ticks/s) is not bounded. A limit joint can hold a joint at a bound or push it back from one,
+    but not let it close in by a set amount, so where a joint turning faster than its speed
+    limit would pass a stop in the step after this one (from where this step moves it), its
+    stop is moved to that angle for this step: the solver stops it there with the limit's full
+    force, short of the stop by less than a step's travel, a tick early rather than a tick late.
+    """
+
+    def __init__(
+        self, limit_joints: list[pymunk.RotaryLimitJoint | None], max_speed: np.ndarray
+    ) -> None:
+        self.joints = {i: j for i, j in enumerate(limit_joints) if j is not None}
+        """Each limited joint's limit joint, by link index."""
+        self.lower = np.array([-math.inf if j is None else j.min for j in limit_joints])
+        self.upper = np.array([math.inf if j is None else j.max for j in limit_joints])
+        self.max_speed = max_speed
+
+    def brace(self, angles: np.ndarray, velocities: np.ndarray, dt: float) -> list[int]:
+        """Move the stops of the knocked joints that the next ``dt`` s step would leave heading
+        past one; ``angles`` (radians) and ``velocities`` (rad/s) are every joint's before it.
+        Returns the braced joints, for :meth:`release`."""
+        ahead = angles + (2.0 * dt) * velocities
+        low, high = ahead < self.lower, ahead > self.upper
+        if not (low.any() or high.any()):
+            return []
+        moved = angles + dt * velocities
+        knocked = np.abs(velocities) > self.max_speed
+        # A joint already past its stop is the limit joint's to push back, not to brace.
+        low &= knocked & (moved >= self.lower)
+        high &= knocked & (moved <= self.upper)
+        braced = np.flatnonzero(low | high).tolist()
+        for i in braced:
+            joint = self.joints[i]  # a free joint's bounds are infinite: never past them
+            # Strictly past the bound pymunk compares with, or the limit stays idle.
+            if low[i]:
+                joint.min = float(moved[i]) + _BRACE_RAD
+            else:
+                joint.max = float(moved[i]) - _BRACE_RAD
+        return braced
+
+    def release(self, braced: list[int]) -> None:
+        """Put the stops of the ``braced`` joints back at their limits."""
+        for i in braced:
+            joint = self.joints[i]
+            joint.min, joint.max = float(self.lower[i]), float(self.upper[i])
 
 
 def _poses(bodies: list[pymunk.Body]) -> np.ndarray:
