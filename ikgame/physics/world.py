@@ -228,6 +228,7 @@ class World:
         self._reads = pymunk.batch.Buffer()
         self._rows: _Rows | None = None
         self._link_angles: np.ndarray | None = None
+        self._joints: tuple[np.ndarray, np.ndarray] | None = None
         self._effector_ends = [
             (self.bodies[i], (self._halves[i], 0.0)) for i in self.effector_links.tolist()
         ]
@@ -272,7 +273,9 @@ class World:
         # The tick's drive applies its loads along the links as read here (a copy: the read's
         # buffer is reused).
         self._link_angles = links[:, 2].copy()
-        return links[:, 2] - parents[:, 2], links[:, 3] - parents[:, 3]
+        # So does the step's bracing of the stops (nothing moves the bodies in between).
+        self._joints = (links[:, 2] - parents[:, 2], links[:, 3] - parents[:, 3])
+        return self._joints
 
     def _state(self) -> tuple[np.ndarray, _Rows]:
         """Every body's x, y, angle and angular velocity in one read (a view of a buffer the
@@ -488,10 +491,10 @@ class World:
     def step(self, dt: float) -> None:
         """Advance the world by ``dt`` seconds."""
         self.last_dt = dt
-        self._link_angles = None
+        read, self._joints, self._link_angles = self._joints, None, None
         move = self._base_move
         if move is None:
-            self._step_space(dt)
+            self._step_space(dt, read)
             return
         move.elapsed += dt
         wanted, wanted_angle, done = move.at(move.elapsed)
@@ -499,7 +502,7 @@ class World:
         turning = move.end_angle != move.start_angle
         if turning:
             self.base_body.angular_velocity = (wanted_angle - self.base_body.angle) / dt
-        self._step_space(dt)
+        self._step_space(dt, read)
         if done:
             self.base_body.velocity = (0.0, 0.0)
             self.base_body.position = tuple(move.end)
@@ -514,10 +517,17 @@ class World:
                 self.base_body.position, self.base_body.angle if turning else None
             )
 
-    def _step_space(self, dt: float) -> None:
-        """Step the space by ``dt`` s with the joint stops braced (see :class:`_Stops`)."""
+    def _step_space(self, dt: float, read: tuple[np.ndarray, np.ndarray] | None) -> None:
+        """Step the space by ``dt`` s with the joint stops braced (see :class:`_Stops`), from
+        the tick's :meth:`joint_state` (``read``; None: the bodies are read here)."""
         stops = self._stops
-        braced = stops.brace(*self.joint_state(), dt) if stops.joints else []
+        if not stops.joints:
+            self.space.step(dt)
+            return
+        if read is None:
+            read = self.joint_state()
+            self._joints = self._link_angles = None
+        braced = stops.brace(*read, dt)
         self.space.step(dt)
         stops.release(braced)
 
