@@ -358,8 +358,7 @@ class Simulation:
             self.controller.skeleton = self.world.skeleton
         # Where every effector ended the tick, read once for the errors and the script.
         self._reached = self.world.effector_positions()
-        errors = self._errors(target)
-        error = math.nan if target is None else float(np.nanmax(errors))
+        errors, error = self._errors(target)
         limited = self.world.torque_limited()
         status = command.solution.status.value
         if target is not None and self._blocked_target is None:
@@ -406,16 +405,20 @@ class Simulation:
             self._effector_weights[aimed],
         )
 
-    def _errors(self, target: np.ndarray | TargetSet | None) -> np.ndarray:
-        """(k,) each effector's distance to its target after the tick, px; nan for an effector
-        without one."""
+    def _errors(self, target: np.ndarray | TargetSet | None) -> tuple[np.ndarray, float]:
+        """(k,) each effector's distance to its target after the tick, px (nan for an effector
+        without one), and the largest of them (nan without a target)."""
         errors = np.full(len(self.effector_names), math.nan)
         if isinstance(target, TargetSet):
             aimed = np.searchsorted(self._effector_links, target.links)
             errors[aimed] = np.hypot(*(self._reached[aimed] - target.points).T)
-        elif target is not None:
-            errors[0] = np.hypot(*(self._reached[0] - target))
-        return errors
+            return errors, float(np.nanmax(errors))
+        if target is None:
+            return errors, math.nan
+        (x, y), (tx, ty) = self._reached[0].tolist(), target.tolist()
+        error = float(np.hypot(x - tx, y - ty))
+        errors[0] = error
+        return errors, error
 
     def _note_blocked(self, finished: int) -> None:
         """Mark the steps that ended while the chain was blocked, in their outcome's note."""

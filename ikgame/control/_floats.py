@@ -64,7 +64,7 @@ class FloatInertia:
 
     def pose(self, world_angles: np.ndarray) -> FloatPose:
         """The geometry at ``world_angles`` (n,) radians."""
-        return FloatPose(self, world_angles)
+        return (_ChainPose if self.chain else FloatPose)(self, world_angles)
 
 
 class FloatPose:
@@ -87,8 +87,6 @@ class FloatPose:
     ) -> Loads:
         """:meth:`Pose.loads <ikgame.control.dynamics.Pose.loads>` over lists."""
         tree = self.inertia_of
-        if tree.chain:
-            return self._chain_loads(omega, alpha, gravity)
         n = tree.count
         if alpha is not None:
             ax = [0.0 + a * -y for a, y in zip(alpha, self.ly, strict=True)]
@@ -114,61 +112,9 @@ class FloatPose:
             spin = [s + i * a for s, i, a in zip(spin, tree.moments, alpha, strict=True)]
         return tree.beyond(spin), fx, fy
 
-    def _chain_loads(
-        self,
-        omega: list[float] | None,
-        alpha: list[float] | None,
-        gravity: tuple[float, float] | None,
-    ) -> Loads:
-        """:meth:`loads` of a serial chain in one pass out and one back. Sums start from -0.0,
-        which adds nothing to any float (0.0 would turn a -0.0 into 0.0), so each adds exactly
-        what ``np.cumsum`` does."""
-        tree = self.inertia_of
-        n = tree.count
-        lx, ly = self.lx, self.ly
-        gx, gy = (0.0, 0.0) if gravity is None else gravity
-        ax, ay = [0.0] * n, [0.0] * n  # numpy's zeros, which alpha and omega add to
-        if alpha is not None:
-            ax = [0.0 + a * -y for a, y in zip(alpha, ly, strict=True)]
-            ay = [0.0 + a * x for a, x in zip(alpha, lx, strict=True)]
-        if omega is not None:
-            ax = [a - w * w * x for a, w, x in zip(ax, omega, lx, strict=True)]
-            ay = [a - w * w * y for a, w, y in zip(ay, omega, ly, strict=True)]
-        masses = tree.masses
-        if alpha is None and omega is None:
-            # Gravity alone: every centre's acceleration is 0.0 - g, as numpy's zeros give.
-            cx, cy = 0.0 - gx, 0.0 - gy
-            own_x, own_y = [m * cx for m in masses], [m * cy for m in masses]
-        else:
-            own_x, own_y = [0.0] * n, [0.0] * n
-            jx = jy = -0.0
-            for i in range(n):
-                x, y = ax[i], ay[i]
-                jx += x
-                jy += y
-                # Each joint accelerates with everything before it; each centre with half its
-                # link.
-                own_x[i] = masses[i] * (jx - 0.5 * x - gx)
-                own_y[i] = masses[i] * (jy - 0.5 * y - gy)
-        hx, hy, moments = self.hx, self.hy, tree.moments
-        fx, fy, torques = [0.0] * n, [0.0] * n, [0.0] * n
-        sx = sy = torque = beyond_x = beyond_y = -0.0
-        for i in range(n - 1, -1, -1):
-            sx += own_x[i]
-            sy += own_y[i]
-            spin = hx[i] * (sy + beyond_y) - hy[i] * (sx + beyond_x)
-            if alpha is not None:
-                spin += moments[i] * alpha[i]
-            torque += spin
-            fx[i], fy[i], torques[i] = sx, sy, torque
-            beyond_x, beyond_y = sx, sy
-        return torques, fx, fy
-
     def inertia(self) -> list[float]:
         """:meth:`Pose.inertia <ikgame.control.dynamics.Pose.inertia>` over lists."""
         tree = self.inertia_of
-        if tree.chain:
-            return self._chain_inertia()
         jx = [a - x for a, x in zip(tree.along(self.lx), self.lx, strict=True)]
         jy = [a - y for a, y in zip(tree.along(self.ly), self.ly, strict=True)]
         cx = [j + h for j, h in zip(jx, self.hx, strict=True)]
@@ -184,31 +130,135 @@ class FloatPose:
             )
         ]
 
-    def _chain_inertia(self) -> list[float]:
-        """:meth:`inertia` of a serial chain in one pass out and one back."""
+    def rest(
+        self, gravity: tuple[float, float], rates: list[float]
+    ) -> tuple[Loads, Loads, list[float]]:
+        """What the servo asks of the pose before it knows the motion it wants: the loads of
+        ``gravity`` alone (px/s^2); those plus the loads of the swing at joint ``rates`` alone
+        (rad/s, child - parent), each added to each; and :meth:`inertia`."""
+        hold = self.loads(gravity=gravity)
+        swing = self.loads(omega=self.inertia_of.along(rates))
+        coasting = (
+            [a + b for a, b in zip(hold[0], swing[0], strict=True)],
+            [a + b for a, b in zip(hold[1], swing[1], strict=True)],
+            [a + b for a, b in zip(hold[2], swing[2], strict=True)],
+        )
+        return hold, coasting, self.inertia()
+
+
+class _ChainPose(FloatPose):
+    """:class:`FloatPose` of a serial chain: each evaluation is one pass out along the links and
+    one back, with no list built between them (the loop, not the arithmetic, is what a short
+    chain pays for). Sums start from -0.0, which adds nothing to any float (0.0 would turn a
+    -0.0 into 0.0), so each adds exactly what ``np.cumsum`` does."""
+
+    def loads(
+        self,
+        omega: list[float] | None = None,
+        alpha: list[float] | None = None,
+        gravity: tuple[float, float] | None = None,
+    ) -> Loads:
+        tree = self.inertia_of
+        n = tree.count
+        lx, ly, masses = self.lx, self.ly, tree.masses
+        gx, gy = (0.0, 0.0) if gravity is None else gravity
+        if alpha is None and omega is None:
+            # Gravity alone: every centre's acceleration is 0.0 - g, as numpy's zeros give.
+            cx, cy = 0.0 - gx, 0.0 - gy
+            own_x, own_y = [m * cx for m in masses], [m * cy for m in masses]
+        else:
+            own_x, own_y = [0.0] * n, [0.0] * n
+            jx = jy = -0.0
+            for i in range(n):
+                x, y = lx[i], ly[i]
+                # The accelerations start from numpy's zeros, which alpha and omega add to.
+                if alpha is None:
+                    ax = ay = 0.0
+                else:
+                    ax, ay = 0.0 + alpha[i] * -y, 0.0 + alpha[i] * x
+                if omega is not None:
+                    w = omega[i]
+                    ax, ay = ax - w * w * x, ay - w * w * y
+                jx += ax
+                jy += ay
+                # Each joint accelerates with everything before it; each centre with half its
+                # link.
+                own_x[i] = masses[i] * (jx - 0.5 * ax - gx)
+                own_y[i] = masses[i] * (jy - 0.5 * ay - gy)
+        return self._back(own_x, own_y, alpha)
+
+    def _back(self, own_x: list[float], own_y: list[float], alpha: list[float] | None) -> Loads:
+        """The pass back: each joint carries its link's ``own`` force and everything beyond."""
+        n = self.inertia_of.count
+        hx, hy, moments = self.hx, self.hy, self.inertia_of.moments
+        fx, fy, torques = [0.0] * n, [0.0] * n, [0.0] * n
+        sx = sy = torque = beyond_x = beyond_y = -0.0
+        for i in range(n - 1, -1, -1):
+            sx += own_x[i]
+            sy += own_y[i]
+            spin = hx[i] * (sy + beyond_y) - hy[i] * (sx + beyond_x)
+            if alpha is not None:
+                spin += moments[i] * alpha[i]
+            torque += spin
+            fx[i], fy[i], torques[i] = sx, sy, torque
+            beyond_x, beyond_y = sx, sy
+        return torques, fx, fy
+
+    def inertia(self) -> list[float]:
+        return self.rest((0.0, 0.0), [0.0] * self.inertia_of.count)[2]
+
+    def rest(
+        self, gravity: tuple[float, float], rates: list[float]
+    ) -> tuple[Loads, Loads, list[float]]:
         tree = self.inertia_of
         n = tree.count
         lx, ly, hx, hy, masses = self.lx, self.ly, self.hx, self.hy, tree.masses
+        # Out: the swing's joint accelerations, and the joints' places for the inertia.
+        swing_x, swing_y = [0.0] * n, [0.0] * n
         jx, jy, mcx, mcy, mcc = [0.0] * n, [0.0] * n, [0.0] * n, [0.0] * n, [0.0] * n
-        ex = ey = -0.0
+        w = ax_sum = ay_sum = ex = ey = -0.0
         for i in range(n):
-            ex += lx[i]
-            ey += ly[i]
-            x, y, m = ex - lx[i], ey - ly[i], masses[i]
-            jx[i], jy[i] = x, y
-            cx, cy = x + hx[i], y + hy[i]
+            x, y, m = lx[i], ly[i], masses[i]
+            w += rates[i]
+            ax, ay = 0.0 - w * w * x, 0.0 - w * w * y
+            ax_sum += ax
+            ay_sum += ay
+            # (the swing's loads leave gravity out: subtracting 0.0 changes no float)
+            swing_x[i], swing_y[i] = m * (ax_sum - 0.5 * ax), m * (ay_sum - 0.5 * ay)
+            ex += x
+            ey += y
+            px, py = ex - x, ey - y
+            jx[i], jy[i] = px, py
+            cx, cy = px + hx[i], py + hy[i]
             mcx[i], mcy[i], mcc[i] = m * cx, m * cy, m * (cx * cx + cy * cy)
-        out = [0.0] * n
-        first_x = first_y = second = -0.0
+        # Back: gravity's loads (every centre accelerates at -g), those plus the swing's, the
+        # inertia.
+        gx, gy = 0.0 - gravity[0], 0.0 - gravity[1]
+        hold_t, hold_x, hold_y = [0.0] * n, [0.0] * n, [0.0] * n
+        swing_t, inertia = [0.0] * n, [0.0] * n
         mass_beyond, moment_beyond = tree.mass_beyond, tree.moment_beyond
+        gsx = gsy = g_torque = gbx = gby = -0.0
+        ssx = ssy = s_torque = sbx = sby = -0.0
+        first_x = first_y = second = -0.0
         for i in range(n - 1, -1, -1):
+            h_x, h_y, m = hx[i], hy[i], masses[i]
+            gsx += m * gx
+            gsy += m * gy
+            g_torque += h_x * (gsy + gby) - h_y * (gsx + gbx)
+            hold_t[i], hold_x[i], hold_y[i] = g_torque, gsx, gsy
+            gbx, gby = gsx, gsy
+            ssx += swing_x[i]
+            ssy += swing_y[i]
+            s_torque += h_x * (ssy + sby) - h_y * (ssx + sbx)
+            swing_t[i], swing_x[i], swing_y[i] = g_torque + s_torque, gsx + ssx, gsy + ssy
+            sbx, sby = ssx, ssy
             first_x += mcx[i]
             first_y += mcy[i]
             second += mcc[i]
             x, y = jx[i], jy[i]
             spread = second - 2.0 * (x * first_x + y * first_y) + mass_beyond[i] * (x * x + y * y)
-            out[i] = moment_beyond[i] + (0.0 if 0.0 > spread else spread)
-        return out
+            inertia[i] = moment_beyond[i] + (0.0 if 0.0 > spread else spread)
+        return (hold_t, hold_x, hold_y), (swing_t, swing_x, swing_y), inertia
 
 
 def fit_floats(
@@ -220,9 +270,12 @@ def fit_floats(
 ) -> tuple[list[float], Loads, list[bool], bool]:
     """:func:`~ikgame.control.dynamics.fit_drive` over lists: the accelerations, the loads,
     which joints are saturated, and whether the loads are those of the motion."""
-    full = _affine(bias, push, 1.0)
-    if all(abs(t) <= lim for t, lim in zip(full[0], limits, strict=True)):
-        return wanted, full, [False] * len(limits), True
+    # bias + push, the torques first: the forces are needed only when those fit.
+    torques = [b + p for b, p in zip(bias[0], push[0], strict=True)]
+    if all(abs(t) <= lim for t, lim in zip(torques, limits, strict=True)):
+        fx = [b + p for b, p in zip(bias[1], push[1], strict=True)]
+        fy = [b + p for b, p in zip(bias[2], push[2], strict=True)]
+        return wanted, (torques, fx, fy), [False] * len(limits), True
     scale, binding = _largest_factor(bias[0], push[0], limits)
     if head is not None and scale is not None and binding < len(limits) - 1:
         near = head(binding)

@@ -50,8 +50,9 @@ def joint_error(desired: np.ndarray, measured: np.ndarray, limited: np.ndarray) 
     array([-0.28318531,  6.        ])
     """
     error = np.asarray(desired, dtype=float) - measured
-    free = ~limited
-    error[free] = [wrap_angle(e) for e in error[free]]
+    if not limited.all():
+        free = ~limited
+        error[free] = [wrap_angle(e) for e in error[free]]
     return error
 
 
@@ -98,6 +99,7 @@ class Controller:
         """Keeps the commanded poses and the way to them clear of static obstacles, if set."""
         self.skeleton = skeleton
         self.max_speed = np.asarray(max_speed, dtype=float)
+        self._speeds = self.max_speed.tolist()
         self.servo = servo
         self.gain = gain
         self.iterations = int(iterations)
@@ -131,6 +133,7 @@ class Controller:
         self.solver.skeleton = skeleton
         # The damping of the target's pseudo-inverse (see _goal_rates), px^2, per chain.
         self._damping = (0.01 * skeleton.reach) ** 2
+        self._lengths = skeleton.lengths.tolist()
         if self.avoider is not None:
             self.avoider.clearance.skeleton = skeleton
 
@@ -165,6 +168,13 @@ class Controller:
             return None
         if isinstance(target, TargetSet) != isinstance(previous, TargetSet):
             return None
+        skeleton = self.skeleton
+        if (
+            not isinstance(target, TargetSet)
+            and skeleton.is_chain
+            and skeleton.count <= FLOAT_LINKS
+        ):
+            return self._chain_rates(measured, target, previous, dt, base_motion)
         if isinstance(target, TargetSet):
             if not np.array_equal(previous.links, target.links):
                 return None
@@ -176,34 +186,17 @@ class Controller:
         if base_motion is not None:
             # The base carries each effector at its own velocity plus its spin about the base.
             base_velocity, spin = base_motion
-            arms = points - self.skeleton.base
+            arms = points - skeleton.base
             velocity = velocity - base_velocity - spin * np.column_stack((-arms[:, 1], arms[:, 0]))
         if not velocity.any():
             return None
-        skeleton, damping = self.skeleton, self._damping
-        if links is None and skeleton.is_chain and skeleton.count <= FLOAT_LINKS:
-            # A short chain's 2x2 system in closed form: np.linalg.solve and the checked
-            # Jacobian cost more than the system itself.
-            base = (float(skeleton.base[0]), float(skeleton.base[1]))
-            vx, vy = velocity[0].tolist()
-            rates = np.array(
-                damped_rates(
-                    skeleton.lengths.tolist(),
-                    base,
-                    skeleton.base_angle,
-                    measured.tolist(),
-                    (vx, vy),
-                    damping,
-                )
-            )
+        if links is None:
+            arms = jacobian(skeleton, measured)
         else:
-            if links is None:
-                arms = jacobian(skeleton, measured)
-            else:
-                arms = stacked_jacobian(skeleton, measured, links)
-            velocity = velocity.reshape(-1)
-            eye = np.eye(len(velocity))
-            rates = arms.T @ np.linalg.solve(arms @ arms.T + damping * eye, velocity)
+            arms = stacked_jacobian(skeleton, measured, links)
+        velocity = velocity.reshape(-1)
+        eye = np.eye(len(velocity))
+        rates = arms.T @ np.linalg.solve(arms @ arms.T + self._damping * eye, velocity)
         # Branches on the base move independently (a creature's legs; a chain is one branch):
         # each is scaled on its own, so a swinging leg at its speed limit does not slow the
         # planted ones, and a leg whose target jumped gets no rates while the others keep theirs.
@@ -213,6 +206,46 @@ class Controller:
         np.maximum.at(worst, roots, over)
         per_link = worst[roots]
         return np.where(per_link > JUMP, 0.0, rates / np.maximum(per_link, 1.0))
+
+    def _chain_rates(
+        self,
+        measured: np.ndarray,
+        target: np.ndarray,
+        previous: np.ndarray,
+        dt: float,
+        base_motion: tuple[np.ndarray, float] | None,
+    ) -> np.ndarray | None:
+        """:meth:`_goal_rates` of a short chain's tip over floats, the same numbers: the 2x2
+        system in closed form (np.linalg.solve and the checked Jacobian cost more than the
+        system itself), one branch to scale, and no numpy call on two or ten numbers."""
+        (tx, ty), (px, py) = target.tolist(), previous.tolist()
+        vx, vy = (tx - px) / dt, (ty - py) / dt
+        skeleton = self.skeleton
+        bx, by = skeleton.base.tolist()
+        if base_motion is not None:
+            (bvx, bvy), spin = base_motion[0].tolist(), base_motion[1]
+            vx, vy = vx - bvx - spin * -(ty - by), vy - bvy - spin * (tx - bx)
+        if not (vx or vy):
+            return None
+        rates = damped_rates(
+            self._lengths,
+            (bx, by),
+            skeleton.base_angle,
+            measured.tolist(),
+            (vx, vy),
+            self._damping,
+        )
+        # One branch: every rate is scaled by the one furthest over its speed limit (as
+        # np.maximum.at and np.maximum take it: a NaN wins).
+        worst = 0.0
+        for rate, speed in zip(rates, self._speeds, strict=True):
+            over = abs(rate) / speed
+            if over > worst or over != over:
+                worst = over
+        if worst > JUMP:
+            return np.zeros(len(rates))
+        scale = 1.0 if worst <= 1.0 else worst
+        return np.array([rate / scale for rate in rates])
 
     def hold(self, measured: np.ndarray) -> None:
         """Stop pushing: hold the ``measured`` pose (radians) instead of solving, until
@@ -298,4 +331,5 @@ def _moved(target: np.ndarray | TargetSet, last: np.ndarray | TargetSet | None) 
         return not (
             np.array_equal(target.links, last.links) and np.array_equal(target.points, last.points)
         )
-    return bool(np.any(target != last))
+    # Two floats each: compared as lists, without numpy's calls.
+    return target.tolist() != last.tolist()

@@ -101,11 +101,14 @@ class Servo:
         self.max_speed = np.asarray(max_speed, dtype=float)
         self.gain = float(gain)
         count = len(self.max_torque)
-        self._stalled = np.zeros(count, dtype=bool)
-        self._saturated = np.zeros(count, dtype=bool)
-        self._velocities = np.zeros(count)
-        self._carried = np.zeros(count)
+        # Per joint, as lists: the float path (most chains) reads and writes them every tick.
+        self._stalled = [False] * count
+        self._saturated = [False] * count
+        self._velocities = [0.0] * count
+        self._carried = [0.0] * count
         self._floats = FloatInertia(inertia) if inertia.count <= FLOAT_LINKS else None
+        if self._floats is not None:
+            self._quiet = _Quiet(self._floats, self.max_torque.tolist())
         self._sections = inertia.count > SECTION_LINKS
         self._limits = self.max_torque.tolist()
         self._speeds = self.max_speed.tolist()
@@ -114,7 +117,7 @@ class Servo:
     def stalled(self) -> np.ndarray:
         """(n,) bool: joints that gave up pushing for their goal at their torque limit (see
         :meth:`retry`)."""
-        return self._stalled.copy()
+        return np.array(self._stalled, dtype=bool)
 
     def _room(self, torques: np.ndarray, hold: np.ndarray, share: float) -> np.ndarray:
         """The ``share`` of each joint's torque left, beyond its ``hold`` load, on the side of
@@ -125,7 +128,7 @@ class Servo:
     def retry(self) -> None:
         """Let joints that stalled at their torque limit push for their goals again: the target
         moved, or the world changed (gravity), so the goal may be within reach now."""
-        self._stalled[:] = False
+        self._stalled = [False] * len(self._stalled)
 
     def command(
         self,
@@ -167,14 +170,15 @@ class Servo:
         # means moving from the goal faster and faster for a while: an overshoot that the motor
         # is braking slows down instead, and is no stall.
         carried = (
-            self._saturated
+            np.array(self._saturated)
             & (velocities * error < 0.0)
-            & (np.abs(velocities) > np.maximum(np.abs(self._velocities), STALL_SPEED))
+            & (np.abs(velocities) > np.maximum(np.abs(np.array(self._velocities)), STALL_SPEED))
         )
-        self._carried = np.where(carried, self._carried + dt, 0.0)
-        self._stalled |= self._carried >= STALL_TIME
-        self._velocities = velocities
-        size = np.where(self._stalled, 0.0, np.abs(error))
+        carried_for = np.where(carried, np.array(self._carried) + dt, 0.0)
+        stalled = np.array(self._stalled) | (carried_for >= STALL_TIME)
+        self._carried, self._stalled = carried_for.tolist(), stalled.tolist()
+        self._velocities = velocities.tolist()
+        size = np.where(stalled, 0.0, np.abs(error))
         speed = np.minimum(
             np.minimum(self.max_speed, self.gain * size), np.sqrt(2.0 * brake * size)
         )
@@ -218,7 +222,7 @@ class Servo:
             # swing's own loads, clipped, would fight the pivots and fling a long chain apart.
             # Gravity and the wanted acceleration alone, and pymunk's pivots find the rest.
             drive = fit_drive(hold, push, wanted_acceleration, self.max_torque, head)
-        self._saturated = drive.saturated
+        self._saturated = drive.saturated.tolist()
         return ServoCommand(
             rates=velocities + drive.accelerations * dt,
             torques=drive.loads.torques,
@@ -240,68 +244,77 @@ class Servo:
         pose = tree.pose(world_angles)
         limits, speeds, gain = self._limits, self._speeds, self.gain
         errors, now = error.tolist(), velocities.tolist()
-        hold = pose.loads(gravity=(float(gravity[0]), float(gravity[1])))
+        hold, coasting, inertia = pose.rest((float(gravity[0]), float(gravity[1])), now)
         held = hold[0]
-        inertia = pose.inertia()
-        saturated, before = self._saturated.tolist(), self._velocities.tolist()
-        carried, stalled = self._carried.tolist(), self._stalled.tolist()
-        # Each step as in command, with numpy's maximum and minimum written out (same floats).
-        up, down, closing = [], [], []
+        # Each step as in command, with numpy's maximum, minimum and sign written out (the same
+        # floats: a sign times a speed is the speed, its negation, zero or NaN).
+        up, down, closing, carried, stalled = [], [], [], [], []
         stop_in = math.inf
-        for j, e in enumerate(errors):
-            lim, h, i, v = limits[j], held[j], inertia[j], now[j]
+        floor_share, brake_share, stall_speed = BRAKE_FLOOR, BRAKE_SHARE, STALL_SPEED
+        for lim, e, v, i, h, top, saturated, before, was_carried, was_stalled in zip(
+            limits,
+            errors,
+            now,
+            inertia,
+            held,
+            speeds,
+            self._saturated,
+            self._velocities,
+            self._carried,
+            self._stalled,
+            strict=True,
+        ):
             u, d = lim - h, lim + h
             u = (0.0 if 0.0 > u else u) / i
             d = (0.0 if 0.0 > d else d) / i
             up.append(u)
             down.append(d)
             against = d if e > 0.0 else u
-            floor = BRAKE_FLOOR * lim / i
-            brake = BRAKE_SHARE * (floor if floor > against else against)
-            slow = abs(before[j])
-            if (
-                saturated[j]
-                and v * e < 0.0
-                and abs(v) > (STALL_SPEED if STALL_SPEED > slow else slow)
-            ):
-                carried[j] += dt
+            floor = floor_share * lim / i
+            brake = brake_share * (floor if floor > against else against)
+            slow = abs(before)
+            if saturated and v * e < 0.0 and abs(v) > (stall_speed if stall_speed > slow else slow):
+                was_carried += dt
             else:
-                carried[j] = 0.0
-            stalled[j] = stalled[j] or carried[j] >= STALL_TIME
-            size = 0.0 if stalled[j] else abs(e)
-            speed, by_gain = speeds[j], gain * size
-            speed = by_gain if by_gain < speed else speed
+                was_carried = 0.0
+            carried.append(was_carried)
+            is_stalled = was_stalled or was_carried >= STALL_TIME
+            stalled.append(is_stalled)
+            size = 0.0 if is_stalled else abs(e)
+            by_gain = gain * size
+            speed = by_gain if by_gain < top else top
             by_brake = math.sqrt(2.0 * brake * size)
             speed = by_brake if by_brake < speed else speed
-            c = _sign(e) * speed
+            c = speed if e > 0.0 else -speed if e < 0.0 else 0.0 * speed if e == 0.0 else e
             closing.append(c)
             if abs(c) > 1e-9:
                 stop = 2.0 * abs(e) / abs(c)
                 stop_in = stop if stop < stop_in else stop_in
-        self._carried = np.array(carried)
-        self._stalled = np.array(stalled)
-        self._velocities = velocities
+        self._carried, self._stalled, self._velocities = carried, stalled, now
+        # The loads of braking and of spinning are evaluated only when a bound on them (see
+        # _Quiet) leaves any joint short of room: otherwise their factor is 1, exactly.
+        quiet = self._quiet
         if stop_in != math.inf:
-            halt = pose.loads(alpha=tree.along([-c / stop_in for c in closing]))[0]
-            factor = _fit_floats(halt, held, limits, BRAKE_SHARE)
-            closing = [c * factor for c in closing]
+            braking = [-c / stop_in for c in closing]
+            if not quiet.brakes(braking):
+                halt = pose.loads(alpha=tree.along(braking))[0]
+                factor = _fit_floats(halt, held, limits, BRAKE_SHARE)
+                closing = [c * factor for c in closing]
         if goal_rates is not None:
             closing = [c + g for c, g in zip(closing, goal_rates.tolist(), strict=True)]
-        target = [min(max(t, -s), s) for t, s in zip(closing, speeds, strict=True)]
-        spin = pose.loads(omega=tree.along(target))[0]
-        factor = _fit_floats(spin, held, limits, 1.0 - BRAKE_SHARE)
-        wanted = [
-            min(max(t * factor, v - d * dt), v + u * dt)
-            for t, v, d, u in zip(target, now, down, up, strict=True)
-        ]
-        accelerations = [(w - v) / dt for w, v in zip(wanted, now, strict=True)]
+        target = [(-s if -s > t else t) for t, s in zip(closing, speeds, strict=True)]
+        target = [(s if s < t else t) for t, s in zip(target, speeds, strict=True)]
+        factor = 1.0
+        if not quiet.spins(target):
+            spin = pose.loads(omega=tree.along(target))[0]
+            factor = _fit_floats(spin, held, limits, 1.0 - BRAKE_SHARE)
+        accelerations = []
+        for t, v, d, u in zip(target, now, down, up, strict=True):
+            wanted, slowest, fastest = t * factor, v - d * dt, v + u * dt
+            wanted = slowest if slowest > wanted else wanted
+            wanted = fastest if fastest < wanted else wanted
+            accelerations.append((wanted - v) / dt)
         push = pose.loads(alpha=tree.along(accelerations))
-        swing = pose.loads(omega=tree.along(now))
-        bias = (
-            [a + b for a, b in zip(hold[0], swing[0], strict=True)],
-            [a + b for a, b in zip(hold[1], swing[1], strict=True)],
-            [a + b for a, b in zip(hold[2], swing[2], strict=True)],
-        )
 
         def near(k: int) -> Loads:
             return pose.loads(
@@ -309,20 +322,63 @@ class Servo:
             )
 
         head = near if self._sections else None
-        reached, loads, saturated, consistent = fit_floats(bias, push, accelerations, limits, head)
+        reached, loads, saturated, consistent = fit_floats(
+            coasting, push, accelerations, limits, head
+        )
         if not consistent:
             # See command: gravity and the wanted acceleration alone, pymunk's pivots the rest.
             reached, loads, saturated, _ = fit_floats(hold, push, accelerations, limits, head)
-        self._saturated = np.array(saturated)
+        self._saturated = saturated
         torques = loads[0]
         return ServoCommand(
             rates=np.array([v + a * dt for v, a in zip(now, reached, strict=True)]),
             torques=np.array(torques),
             forces=np.array((loads[1], loads[2])).T,
             budgets=np.array(
-                [max(lim - abs(t), 0.0) for lim, t in zip(limits, torques, strict=True)]
+                [
+                    0.0 if 0.0 > (left := lim - abs(t)) else left
+                    for lim, t in zip(limits, torques, strict=True)
+                ]
             ),
         )
+
+
+class _Quiet:
+    """Rates and accelerations too small for their loads to need room a joint lacks.
+
+    Per link, the centre accelerates at most at the sum over all links of ``omega^2 L`` (or
+    ``|alpha| L``), and each world rate is at most the sum ``S`` of the joints' absolute rates.
+    So joint ``i``'s torque is at most ``A P_i`` plus, for accelerations, ``S`` times the
+    moments beyond it, where ``A`` is ``S^2`` (or ``S``) times the total length and ``P_i`` sums
+    ``L_k`` times the mass beyond ``k`` over the links beyond ``i``. The servo gives each joint
+    at least its share of the floor of its torque limit: a bound within half of that (a
+    margin far beyond rounding) means no joint is short, and the factor is 1 without the loads.
+    """
+
+    def __init__(self, tree: FloatInertia, limits: list[float]) -> None:
+        reach = math.fsum(tree.lengths)
+        lever = tree.beyond(
+            [length * m for length, m in zip(tree.lengths, tree.mass_beyond, strict=True)]
+        )
+        self._spin = self._brake = math.inf
+        for p, moments, limit in zip(lever, tree.moment_beyond, limits, strict=True):
+            floor = BRAKE_FLOOR * limit
+            spin, brake = 2.0 * reach * p, 2.0 * (reach * p + moments)
+            if spin > 0.0:
+                self._spin = min(self._spin, (1.0 - BRAKE_SHARE) * floor / spin)
+            if brake > 0.0:
+                self._brake = min(self._brake, BRAKE_SHARE * floor / brake)
+
+    def spins(self, rates: list[float]) -> bool:
+        """True when the loads of joint ``rates`` alone (rad/s, child - parent) surely fit every
+        joint's room for them; False when they might not."""
+        total = math.fsum(map(abs, rates))
+        return total * total <= self._spin
+
+    def brakes(self, accelerations: list[float]) -> bool:
+        """True when the loads of joint ``accelerations`` alone (rad/s^2) surely fit every
+        joint's room for braking; False when they might not."""
+        return math.fsum(map(abs, accelerations)) <= self._brake
 
 
 def _sign(value: float) -> float:
@@ -334,7 +390,9 @@ def _fit_floats(loads: list[float], hold: list[float], limits: list[float], shar
     """:func:`_fit` of ``loads`` within :meth:`Servo._room` over floats."""
     factor = math.inf
     for load, held, lim in zip(loads, hold, limits, strict=True):
-        left, floor = lim - _sign(load) * held, BRAKE_FLOOR * lim
+        # _sign(load) * held, with the sign's product written out where it is exact.
+        signed = held if load > 0.0 else -held if load < 0.0 else _sign(load) * held
+        left, floor = lim - signed, BRAKE_FLOOR * lim
         room = share * (floor if floor > left else left)
         need = abs(load)
         if need > room:

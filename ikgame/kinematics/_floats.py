@@ -8,7 +8,9 @@ from __future__ import annotations
 
 import math
 
-from ikgame.kinematics.skeleton import Skeleton
+import numpy as np
+
+from ikgame.kinematics.skeleton import Skeleton, check_angles, check_point
 
 
 def check_chain(skeleton: Skeleton) -> None:
@@ -20,6 +22,32 @@ def check_chain(skeleton: Skeleton) -> None:
             "this solver needs joint 0 on the base (zero root_offsets); "
             "the multi-target solvers take root offsets"
         )
+
+
+def float_angles(angles: object, count: int) -> list[float]:
+    """``angles`` as a list of floats, or ``ValueError`` (as :func:`check_angles` words it).
+
+    The common case, a float array of the right shape, is checked without numpy's per-call
+    overhead: this runs every tick.
+    """
+    if isinstance(angles, np.ndarray) and angles.shape == (count,) and angles.dtype == float:
+        listed = angles.tolist()
+        if all(map(math.isfinite, listed)):
+            return listed
+    return check_angles(angles, count).tolist()
+
+
+def float_point(point: object) -> tuple[float, float]:
+    """``point`` as two finite floats, px, or ``ValueError`` (as :func:`check_point` words it)."""
+    if isinstance(point, np.ndarray) and point.shape == (2,) and point.dtype == float:
+        x, y = point.tolist()
+    elif isinstance(point, tuple) and len(point) == 2 and all(type(v) is float for v in point):
+        x, y = point
+    else:
+        x, y = check_point(point).tolist()
+    if not (math.isfinite(x) and math.isfinite(y)):
+        x, y = check_point(point).tolist()
+    return x, y
 
 
 class FloatChain:
@@ -34,6 +62,15 @@ class FloatChain:
         self.base_x = float(skeleton.base[0])
         self.base_y = float(skeleton.base[1])
         self.base_angle = skeleton.base_angle
+
+    def clamp(self, angles: list[float]) -> list[float]:
+        """:meth:`Skeleton.clamp` over lists: the same floats as ``np.clip`` against the limit
+        arrays gives (where an angle equals a limit, the limit, whichever zero it is)."""
+        out = []
+        for angle, low, high in zip(angles, self.lower, self.upper, strict=True):
+            angle = angle if angle > low else low
+            out.append(angle if angle < high else high)
+        return out
 
     def joints(self, angles: list[float]) -> tuple[list[float], list[float]]:
         """World x and y of every joint, then the end effector, px."""

@@ -14,7 +14,7 @@ from typing import Final
 
 import numpy as np
 
-from ikgame.kinematics._floats import FloatChain
+from ikgame.kinematics._floats import FloatChain, float_angles, float_point
 from ikgame.kinematics.skeleton import Skeleton, check_angles, check_point
 from ikgame.kinematics.solver import Solution, SolveStatus
 
@@ -174,12 +174,28 @@ def ccd_iteration_limited(
     >>> float(angles[0])
     0.5
     """
-    chain = _Chain(skeleton)
+    chain = _chain(skeleton)
     tx, ty = (float(v) for v in check_point(target))
     arrival = _check_arrival(arrival_dist)
     start = check_angles(angles, skeleton.count).tolist()
     status, new = chain.iterate(start, tx, ty, arrival * arrival)
     return status, np.array(new)
+
+
+_last: tuple[Skeleton, _Chain] | None = None
+"""The skeleton solved last and its chain as floats: a controller solves one chain every tick,
+and a :class:`Skeleton` is frozen (one that moves is a new object)."""
+
+
+def _chain(skeleton: Skeleton) -> _Chain:
+    """``skeleton`` as a :class:`_Chain`, reused while the same skeleton comes back."""
+    global _last
+    last = _last
+    if last is not None and last[0] is skeleton:
+        return last[1]
+    chain = _Chain(skeleton)
+    _last = (skeleton, chain)
+    return chain
 
 
 class _Chain(FloatChain):
@@ -238,10 +254,10 @@ def solve_ccd(
     """
     if max_iterations < 1:
         raise ValueError(f"max_iterations must be >= 1, got {max_iterations}")
-    tx, ty = (float(v) for v in check_point(target))
+    tx, ty = float_point(target)
     tolerance = _check_arrival(tolerance)
-    chain = _Chain(skeleton)
-    current = skeleton.clamp(check_angles(angles, skeleton.count)).tolist()
+    chain = _chain(skeleton)
+    current = chain.clamp(float_angles(angles, skeleton.count))
     error_sqr = chain.error_sqr(current, tx, ty)
     status = SolveStatus.SUCCESS if error_sqr <= tolerance * tolerance else SolveStatus.PROCESSING
     used = 0

@@ -192,6 +192,11 @@ class Clearance:
                 if parent >= 0:
                     lever[parent] = max(lever[parent], lengths[parent] + lever[i])
             self._lever = lever
+        # How far a point of link i can be from joint j when j moves it (0 when it does not):
+        # the step bound link by link.
+        anc = skeleton.ancestors
+        depth = anc @ lengths  # each link's end, along its path from the base
+        self._link_lever = np.where(anc, depth[:, None] - depth[None, :] + lengths[None, :], 0.0)
 
     # -- distances ---------------------------------------------------------------------------
 
@@ -293,6 +298,12 @@ class Clearance:
         """Farthest any point of the skeleton can move on the straight line from pose ``a`` to
         ``b``, px: a bound, so a pose ``swept`` px clear at ``a`` stays clear all the way."""
         return float(np.abs(b - a) @ self._lever)
+
+    def swept_links(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """(n,) farthest any point of each link can move on the straight line from pose ``a``
+        to ``b``, px: :meth:`swept` link by link, so a link near an obstacle whose own joints
+        barely turn is seen to stay clear however far the rest moves."""
+        return self._link_lever @ np.abs(b - a)
 
     def is_clear(self, angles: np.ndarray, floor: float = 0.0) -> bool:
         """True when no link comes closer than ``floor`` px to an obstacle."""
@@ -594,7 +605,7 @@ class Avoider:
         self._tolerance: float | np.ndarray = 0.0
         self._resting = 0
         self._line: tuple[np.ndarray, np.ndarray, float] | None = None
-        self._checked: tuple[np.ndarray, float] | None = None
+        self._checked: tuple[np.ndarray, np.ndarray] | None = None
 
     def steer(
         self,
@@ -700,18 +711,21 @@ class Avoider:
         return clear
 
     def _far_enough(self, measured: np.ndarray, pose: np.ndarray) -> bool:
-        """Whether the chain is so far from every obstacle that neither ``pose`` nor the way to
-        it can touch one. The gap is measured afresh only when the motion since the last
-        measure could have used it up, so a chain at rest or in the open costs a dot product."""
+        """Whether every link is so far from every obstacle that neither ``pose`` nor the way
+        to it can bring it into one (link by link: a torso standing on the floor while its arms
+        swing above is far enough). The gaps are measured afresh only when the motion since the
+        last measure could have used one up, so a chain at rest or in the open costs a dot
+        product."""
         room = self.clearance
+        ahead = room.swept_links(measured, pose)
         checked = self._checked
         if checked is not None:
-            since, gap = checked
-            if gap - room.swept(since, measured) - room.swept(measured, pose) >= 0.0:
+            since, gaps = checked
+            if np.all(gaps - room.swept_links(since, measured) - ahead >= 0.0):
                 return True
-        gap = float(room.gaps(measured).min())
-        self._checked = (measured.copy(), gap)
-        return gap - room.swept(measured, pose) >= 0.0
+        gaps = room.gaps(measured)
+        self._checked = (measured.copy(), gaps)
+        return bool(np.all(gaps - ahead >= 0.0))
 
     def _follow(self, measured: np.ndarray, solution: Solution) -> Solution:
         """The via pose to head for: the next one once the chain, near the current one (within

@@ -368,7 +368,10 @@ def _check_settings(max_iterations: object, tolerance: object) -> float:
         or max_iterations < 1
     ):
         raise ValueError(f"max_iterations must be an integer >= 1, got {max_iterations!r}")
-    if isinstance(tolerance, bool) or not isinstance(tolerance, Real):
+    # A float is the common case, and the abstract Real check costs more than the solve's checks.
+    if type(tolerance) is not float and (
+        isinstance(tolerance, bool) or not isinstance(tolerance, Real)
+    ):
         raise ValueError(f"tolerance must be a number of px, got {tolerance!r}")
     tol = float(tolerance)
     if not math.isfinite(tol) or tol < 0.0:

@@ -58,12 +58,12 @@ from typing import Final
 
 import numpy as np
 
-from ikgame.kinematics._floats import FloatChain
+from ikgame.kinematics._floats import FloatChain, float_angles, float_point
 from ikgame.kinematics.ccd import wrap_angle
 from ikgame.kinematics.jacobian import _chain_points, _check_settings, solve_dls
 from ikgame.kinematics.multi_jacobian import solve_dls_targets
 from ikgame.kinematics.registry import get_solver, get_target_solver
-from ikgame.kinematics.skeleton import Skeleton, check_angles, check_point, tree_points
+from ikgame.kinematics.skeleton import Skeleton, tree_points
 from ikgame.kinematics.solver import Solution, Solver, SolveStatus, TargetSolver
 from ikgame.kinematics.targets import TargetSet
 
@@ -269,8 +269,8 @@ class RobustSolver:
         tol = _check_settings(max_iterations, tolerance)
         if self._chain is None:
             raise ValueError("solve needs a chain with joint 0 on the base; use solve_targets")
-        measured = _angles_list(angles, self._skeleton.count)
-        goal = _point(target)
+        measured = float_angles(angles, self._skeleton.count)
+        goal = float_point(target)
         chain = self._chain
         cached = self._cached(
             measured, goal, tol, lambda listed: (math.sqrt(chain.error_sqr(listed, *goal)), None)
@@ -348,7 +348,7 @@ class RobustSolver:
                 sol.angles, sol.status, sol.iterations, sol.error, np.array([sol.error])
             )
         tol = _check_settings(max_iterations, tolerance)
-        measured = _angles_list(angles, skeleton.count)
+        measured = float_angles(angles, skeleton.count)
         goal = _goal_key(targets)
 
         def measure(angles: np.ndarray | list[float]) -> tuple[float, np.ndarray]:
@@ -733,32 +733,6 @@ def _aimed(skeleton: Skeleton, angles: np.ndarray, target: np.ndarray) -> np.nda
     aimed = angles.copy()
     aimed[0] = min(choices, key=lambda c: abs(c - angles[0]))
     return aimed
-
-
-def _angles_list(angles: object, count: int) -> list[float]:
-    """``angles`` as a list of floats, or ``ValueError`` (as :func:`check_angles` words it).
-
-    The common case, a float array of the right shape, is checked without numpy's per-call
-    overhead: this runs every tick.
-    """
-    if isinstance(angles, np.ndarray) and angles.shape == (count,) and angles.dtype == float:
-        listed = angles.tolist()
-        if all(map(math.isfinite, listed)):
-            return listed
-    return check_angles(angles, count).tolist()
-
-
-def _point(point: object) -> tuple[float, float]:
-    """``point`` as two finite floats, px, or ``ValueError`` (as :func:`check_point` words it)."""
-    if isinstance(point, np.ndarray) and point.shape == (2,) and point.dtype == float:
-        x, y = point.tolist()
-    elif isinstance(point, tuple) and len(point) == 2 and all(type(v) is float for v in point):
-        x, y = point
-    else:
-        x, y = check_point(point).tolist()
-    if not (math.isfinite(x) and math.isfinite(y)):
-        x, y = check_point(point).tolist()
-    return x, y
 
 
 def _within(free_joints: list[bool], measured: list[float], answer: list[float]) -> bool:

@@ -372,7 +372,8 @@ class Skeleton:
         >>> Skeleton.tree([1, 1, 1], [-1, 0, 0]).world_angles(np.array([0.5, 0.25, -0.5])).tolist()
         [0.5, 0.75, 0.0]
         """
-        path = np.cumsum(angles) if self.is_chain else self._paths @ angles
+        # np.add.accumulate is np.cumsum without its dispatch, which costs more on ten links.
+        path = np.add.accumulate(angles) if self.is_chain else self._paths @ angles
         return path + self.base_angle
 
     def clamp(self, angles: np.ndarray) -> np.ndarray:

@@ -3,7 +3,8 @@ dynamic props.
 
 Each link is a dynamic body centred on the link, with a thick segment shape. Consecutive links
 are pinned by a ``PivotJoint``, driven by a ``SimpleMotor`` whose ``max_force`` is the joint's
-torque limit, and held in range by a ``RotaryLimitJoint`` where the level sets limits. Link 0
+torque limit, and held in range by a ``RotaryLimitJoint`` where the level sets limits (braced, so
+that a joint knocked toward a stop halts within a step short of it, not a step past it). Link 0
 hangs off a kinematic base body, so a script can move the base smoothly (:meth:`World.move_base`).
 Links of one chain never collide with each other; they do collide with obstacles and props, and
 props collide with everything.
@@ -35,6 +36,10 @@ than the default 10 to stay stiff under gravity, and each sweep of the solver ca
 correction one joint further, so a chain of more links than this needs as many sweeps for its
 far end to hear of its base (200 links at 60 rocked at rest by 1 to 6 px)."""
 
+FLOAT_LINKS: Final = 30
+"""Chains up to this many links get their loads written link by link over Python floats,
+longer ones and trees over numpy arrays: the same numbers either way, whichever is faster."""
+
 DIVERGENCE_LIMIT: Final = 1.0e6
 """A body farther than this from the origin (px), or turned this many radians, has blown up."""
 
@@ -52,6 +57,9 @@ _IMPULSE: Final = pymunk.Constraint.impulse.fget
 """The motor setters and getter themselves, called per motor each tick without pymunk's
 attribute hook."""
 
+_BRACE_RAD: Final = 1e-9
+"""How far beyond a braced joint's angle (back into its range) its stop is set, radians: pymunk
+acts only on a joint strictly past its bound, and pushes back from this little unnoticeably."""
 _CHAIN_GROUP: Final = 1
 _LINK_TYPE: Final = 1
 """The collision type of every link's shape."""
@@ -216,9 +224,15 @@ class World:
         """(n,) moment of inertia of each link about its centre, mass px^2."""
         self._lengths = 2.0 * np.array(self._halves, dtype=float)
         self._halves_array = 0.5 * self._lengths
-        self._feed_forward = np.zeros(self.count)
+        self._feed_forward = [0.0] * self.count
         self._reads = pymunk.batch.Buffer()
         self._rows: _Rows | None = None
+        self._link_angles: np.ndarray | None = None
+        self._joints: tuple[np.ndarray, np.ndarray] | None = None
+        self._effector_ends = [
+            (self.bodies[i], (self._halves[i], 0.0)) for i in self.effector_links.tolist()
+        ]
+        self._stops = _Stops(self.limit_joints, self.max_speed)
 
     @property
     def count(self) -> int:
@@ -235,9 +249,10 @@ class World:
         return state[rows.links, 2] - state[rows.parents, 2]
 
     @property
-    def gravity(self) -> np.ndarray:
-        """(2,) gravity now, px/s^2."""
-        return np.array(self.space.gravity)
+    def gravity(self) -> tuple[float, float]:
+        """Gravity now, ``(x, y)`` px/s^2."""
+        gravity = self.space.gravity
+        return gravity.x, gravity.y
 
     def joint_velocities(self) -> np.ndarray:
         """(n,) relative angular velocity of each joint (child - parent), rad/s."""
@@ -255,7 +270,12 @@ class World:
         """
         state, rows = self._state()
         links, parents = state[rows.links], state[rows.parents]
-        return links[:, 2] - parents[:, 2], links[:, 3] - parents[:, 3]
+        # The tick's drive applies its loads along the links as read here (a copy: the read's
+        # buffer is reused).
+        self._link_angles = links[:, 2].copy()
+        # So does the step's bracing of the stops (nothing moves the bodies in between).
+        self._joints = (links[:, 2] - parents[:, 2], links[:, 3] - parents[:, 3])
+        return self._joints
 
     def _state(self) -> tuple[np.ndarray, _Rows]:
         """Every body's x, y, angle and angular velocity in one read (a view of a buffer the
@@ -287,7 +307,9 @@ class World:
 
     def effector_positions(self) -> np.ndarray:
         """(k, 2) world position of each end effector, px, in :attr:`effector_links` order."""
-        return self.link_ends(self.effector_links)
+        return np.array(
+            [body.local_to_world(end) for body, end in self._effector_ends], dtype=float
+        )
 
     def link_ends(self, links: np.ndarray) -> np.ndarray:
         """(m, 2) world position of the far end of each of ``links`` (indices), px."""
@@ -317,7 +339,9 @@ class World:
         them anyway, so giving them here only saves the constraint solver from finding them.
         The base body is kinematic and takes the reactions of joint 0. Each motor then holds
         its ``rates`` entry (rad/s) with at most its ``budgets`` entry of torque, so that a
-        joint's feed-forward torque and its motor's never add up to more than its limit.
+        joint's feed-forward torque and its motor's never add up to more than its limit. The
+        loads act along the links as :meth:`joint_state` last read them since the last step
+        (the tick reads the bodies once), else as they are now.
 
         >>> from ikgame.level.model import Level
         >>> world = World(Level.model_validate({"level": {"name": "x", "duration": 1.0},
@@ -330,15 +354,36 @@ class World:
         >>> round(float(world.joint_velocities()[0]), 6)
         4.0
         """
-        state, rows = self._state()
-        angles = state[rows.links, 2]
-        hx, hy = self._halves_array * np.cos(angles), self._halves_array * np.sin(angles)
+        angles = self._link_angles
+        if angles is None:
+            state, rows = self._state()
+            angles = state[rows.links, 2]
+        rows = self._rows
+        loads = rows.loads
         # Each body takes its joint's loads and the reactions of the joints at its end, all
         # acting at the link's ends, so the pivot forces turn it about its centre too. Bodies
         # other than links get no load: pymunk clears applied loads after every step.
-        pair = forces.copy()
-        loads = rows.loads
-        if rows.consecutive:
+        if rows.consecutive and self.count <= FLOAT_LINKS:
+            # A short chain, link by link over floats (numpy's calls cost more than its sums):
+            # the same operations as the arrays below.
+            cos, sin = np.cos(angles).tolist(), np.sin(angles).tolist()
+            t, f, halves = torques.tolist(), forces.tolist(), self._halves
+            n = len(t)
+            body = [0.0] * (3 * n)
+            for i in range(n):
+                fx, fy = f[i]
+                pair_x, pair_y, load_x, load_y, torque = fx, fy, fx, fy, t[i]
+                if i + 1 < n:
+                    next_x, next_y = f[i + 1]
+                    pair_x, pair_y = fx + next_x, fy + next_y
+                    load_x, load_y = fx - next_x, fy - next_y
+                    torque = torque - t[i + 1]
+                hx, hy = halves[i] * cos[i], halves[i] * sin[i]
+                body[3 * i : 3 * i + 3] = load_x, load_y, torque - (hx * pair_y - hy * pair_x)
+            loads[rows.links].reshape(-1)[:] = body  # a view: the links are consecutive rows
+        elif rows.consecutive:
+            hx, hy = self._halves_array * np.cos(angles), self._halves_array * np.sin(angles)
+            pair = forces.copy()
             pair[:-1] += forces[1:]
             body = loads[rows.links]  # a view: the links are consecutive rows
             body[:, :2] = forces
@@ -347,6 +392,8 @@ class World:
             body[:-1, 2] -= torques[1:]
             body[:, 2] -= hx * pair[:, 1] - hy * pair[:, 0]
         else:
+            hx, hy = self._halves_array * np.cos(angles), self._halves_array * np.sin(angles)
+            pair = forces.copy()
             beyond_forces, beyond_torques = np.zeros((self.count, 2)), np.zeros(self.count)
             np.add.at(beyond_forces, rows.hanging_parents, forces[rows.hanging])
             np.add.at(beyond_torques, rows.hanging_parents, torques[rows.hanging])
@@ -358,14 +405,18 @@ class World:
             # SimpleMotor drives (b.w - a.w) toward -rate.
             _SET_RATE(motor, -rate)
             _SET_MAX_FORCE(motor, budget)
-        self._feed_forward = np.array(torques, dtype=float)
+        self._feed_forward = np.asarray(torques, dtype=float).tolist()
 
     def motor_torques(self) -> np.ndarray:
         """(n,) magnitude of the torque each joint applied during the last step: feed-forward
         plus its motor's correction (the motor's impulse / dt)."""
         dt = self.last_dt
-        motor = np.array([_IMPULSE(m) for m in self.motors]) / dt
-        return np.abs(self._feed_forward + motor)
+        return np.array(
+            [
+                abs(f + _IMPULSE(m) / dt)
+                for f, m in zip(self._feed_forward, self.motors, strict=True)
+            ]
+        )
 
     def torque_limited(self) -> np.ndarray:
         """(n,) bool: which joints were at their torque limit during the last step."""
@@ -440,9 +491,10 @@ class World:
     def step(self, dt: float) -> None:
         """Advance the world by ``dt`` seconds."""
         self.last_dt = dt
+        read, self._joints, self._link_angles = self._joints, None, None
         move = self._base_move
         if move is None:
-            self.space.step(dt)
+            self._step_space(dt, read)
             return
         move.elapsed += dt
         wanted, wanted_angle, done = move.at(move.elapsed)
@@ -450,7 +502,7 @@ class World:
         turning = move.end_angle != move.start_angle
         if turning:
             self.base_body.angular_velocity = (wanted_angle - self.base_body.angle) / dt
-        self.space.step(dt)
+        self._step_space(dt, read)
         if done:
             self.base_body.velocity = (0.0, 0.0)
             self.base_body.position = tuple(move.end)
@@ -464,6 +516,20 @@ class World:
             self.skeleton = self.skeleton.moved_to(
                 self.base_body.position, self.base_body.angle if turning else None
             )
+
+    def _step_space(self, dt: float, read: tuple[np.ndarray, np.ndarray] | None) -> None:
+        """Step the space by ``dt`` s with the joint stops braced (see :class:`_Stops`), from
+        the tick's :meth:`joint_state` (``read``; None: the bodies are read here)."""
+        stops = self._stops
+        if not stops.joints:
+            self.space.step(dt)
+            return
+        if read is None:
+            read = self.joint_state()
+            self._joints = self._link_angles = None
+        braced = stops.brace(*read, dt)
+        self.space.step(dt)
+        stops.release(braced)
 
     def diverged(self) -> bool:
         """True when any link's, prop's or the base's pose is NaN, infinite, or absurdly far.
@@ -538,6 +604,61 @@ class _Rows:
         """Force x, y and torque per row, written to the space each tick."""
         self.writes = pymunk.batch.Buffer()
         self.writes.set_float_buf(self.loads)
+
+
+class _Stops:
+    """The joints' limits, braced against a joint knocked toward one.
+
+    pymunk moves every body by its velocity first and then solves the constraints for the
+    velocities of the next step, and a ``RotaryLimitJoint`` acts only on a joint already past
+    its limit. So the velocity a step leaves a joint with can carry it past its stop by up to
+    one step's travel before the limit notices. A joint its motor turns moves at most at its
+    speed limit, which keeps that small (and the motor drives it on into the stop anyway); a
+    joint knocked faster (a hand struck back by the floor at 1000 deg/s, 4 deg a tick at 240
+    ticks/s) is not bounded. A limit joint can hold a joint at a bound or push it back from one,
+    but not let it close in by a set amount, so where a joint turning faster than its speed
+    limit would pass a stop in the step after this one (from where this step moves it), its
+    stop is moved to that angle for this step: the solver stops it there with the limit's full
+    force, short of the stop by less than a step's travel, a tick early rather than a tick late.
+    """
+
+    def __init__(
+        self, limit_joints: list[pymunk.RotaryLimitJoint | None], max_speed: np.ndarray
+    ) -> None:
+        self.joints = {i: j for i, j in enumerate(limit_joints) if j is not None}
+        """Each limited joint's limit joint, by link index."""
+        self.lower = np.array([-math.inf if j is None else j.min for j in limit_joints])
+        self.upper = np.array([math.inf if j is None else j.max for j in limit_joints])
+        self.max_speed = max_speed
+
+    def brace(self, angles: np.ndarray, velocities: np.ndarray, dt: float) -> list[int]:
+        """Move the stops of the knocked joints that the next ``dt`` s step would leave heading
+        past one; ``angles`` (radians) and ``velocities`` (rad/s) are every joint's before it.
+        Returns the braced joints, for :meth:`release`."""
+        ahead = angles + (2.0 * dt) * velocities
+        low, high = ahead < self.lower, ahead > self.upper
+        if not (low.any() or high.any()):
+            return []
+        moved = angles + dt * velocities
+        knocked = np.abs(velocities) > self.max_speed
+        # A joint already past its stop is the limit joint's to push back, not to brace.
+        low &= knocked & (moved >= self.lower)
+        high &= knocked & (moved <= self.upper)
+        braced = np.flatnonzero(low | high).tolist()
+        for i in braced:
+            joint = self.joints[i]  # a free joint's bounds are infinite: never past them
+            # Strictly past the bound pymunk compares with, or the limit stays idle.
+            if low[i]:
+                joint.min = float(moved[i]) + _BRACE_RAD
+            else:
+                joint.max = float(moved[i]) - _BRACE_RAD
+        return braced
+
+    def release(self, braced: list[int]) -> None:
+        """Put the stops of the ``braced`` joints back at their limits."""
+        for i in braced:
+            joint = self.joints[i]
+            joint.min, joint.max = float(self.lower[i]), float(self.upper[i])
 
 
 def _poses(bodies: list[pymunk.Body]) -> np.ndarray:

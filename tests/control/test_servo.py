@@ -5,8 +5,9 @@ import math
 import numpy as np
 import pytest
 
+from ikgame.control._floats import FloatInertia
 from ikgame.control.dynamics import ChainInertia
-from ikgame.control.servo import Servo
+from ikgame.control.servo import BRAKE_FLOOR, Servo
 from ikgame.kinematics import forward_kinematics
 from ikgame.level.model import Level
 from ikgame.physics.world import build_skeleton
@@ -95,18 +96,23 @@ def test_long_chain_timing_does_not_depend_on_the_tick_rate(tick_rate):
     assert math.isfinite(reference)
 
 
-@pytest.mark.parametrize("sections", [False, True], ids=["one-factor", "sections"])
-@pytest.mark.parametrize("parents", [None, [-1, 0, 0, 2, -1, 4]], ids=["chain", "tree"])
-def test_the_float_servo_commands_what_the_numpy_servo_does(parents, sections):
-    n = 6
-    rng = np.random.default_rng(11)
+def _random_links(rng, n, parents):
+    """``n`` links of random lengths and masses, as rods, in a chain or on ``parents``."""
     lengths, masses = rng.uniform(10, 60, n), rng.uniform(0.2, 2.0, n)
-    inertia = ChainInertia(
+    return ChainInertia(
         lengths,
         masses,
         masses * lengths**2 / 12,
         parents=None if parents is None else np.array(parents),
     )
+
+
+@pytest.mark.parametrize("sections", [False, True], ids=["one-factor", "sections"])
+@pytest.mark.parametrize("parents", [None, [-1, 0, 0, 2, -1, 4]], ids=["chain", "tree"])
+def test_the_float_servo_commands_what_the_numpy_servo_does(parents, sections):
+    n = 6
+    rng = np.random.default_rng(11)
+    inertia = _random_links(rng, n, parents)
     limits = dict(max_torque=rng.uniform(2e4, 2e5, n), max_speed=np.full(n, 3.0), gain=12.0)
     fast, slow = Servo(inertia, **limits), Servo(inertia, **limits)
     slow._floats = None  # the numpy path, as chains longer than FLOAT_LINKS take
@@ -160,3 +166,31 @@ def test_two_hundred_links_swing_over_to_the_other_side_within_their_limits():
         worst = max(worst, float(np.max(np.abs(sim.joint_angles()))) - limit)
     assert [outcome.reached for outcome in sim.script.outcomes] == [True, True]
     assert math.degrees(worst) < 2.0
+
+
+@pytest.mark.parametrize("parents", [None, [-1, 0, 0, 2, -1, 4]], ids=["chain", "tree"])
+def test_loads_the_servo_skips_are_within_half_the_smallest_room(parents):
+    # The servo leaves out the loads of braking and spinning when a bound says they fit: that
+    # bound must hold (here with the room's floor halved, the margin it keeps), for any pose.
+    n = 6
+    rng = np.random.default_rng(7)
+    inertia = _random_links(rng, n, parents)
+    limits = rng.uniform(2e4, 2e5, n)
+    servo = Servo(inertia, max_torque=limits, max_speed=np.full(n, 3.0), gain=12.0)
+    quiet, floats = servo._quiet, FloatInertia(inertia)
+    room = 0.5 * BRAKE_FLOOR * limits  # the least either share gives
+    skipped = [0, 0]
+    for _ in range(400):
+        pose = floats.pose(rng.uniform(-3, 3, n))
+        scale = 10.0 ** rng.uniform(-3, 1)
+        rates = (rng.normal(size=n) * scale).tolist()
+        if quiet.spins(rates):
+            skipped[0] += 1
+            torques = np.array(pose.loads(omega=floats.along(rates))[0])
+            assert np.all(np.abs(torques) <= room / 2)
+        accelerations = (rng.normal(size=n) * scale).tolist()
+        if quiet.brakes(accelerations):
+            skipped[1] += 1
+            torques = np.array(pose.loads(alpha=floats.along(accelerations))[0])
+            assert np.all(np.abs(torques) <= room / 2)
+    assert min(skipped) > 20 and max(skipped) < 380  # both ways taken

@@ -119,6 +119,45 @@ def test_swept_bounds_how_far_any_point_moves():
         assert moved <= room.swept(a, b) + 1e-9
 
 
+def test_swept_links_bounds_each_links_own_move_and_never_exceeds_swept():
+    arms = Skeleton.tree([100.0, 80.0, 60.0, 80.0], [-1, 0, 1, 0], base_angle=UP)
+    room = Clearance(arms, np.full(4, 5.0), Obstacles.from_arrays(NO_SEGMENTS, NO_CIRCLES))
+    rng = np.random.default_rng(8)
+    for _ in range(20):
+        a, b = rng.uniform(-2.5, 2.5, (2, 4))
+        line = a + np.linspace(0.0, 1.0, 200)[:, None] * (b - a)
+        off = room.points(line) - room.points(a)  # link starts, then link ends
+        moved = np.hypot(off[..., 0], off[..., 1]).max(axis=0)
+        # A point inside a link moves by a blend of its ends' moves: no farther than they do.
+        each = room.swept_links(a, b)
+        assert np.all(np.maximum(moved[:4], moved[4:]) <= each + 1e-9)
+        assert each.max() <= room.swept(a, b) + 1e-9
+    # Turning only the second arm moves neither the torso nor the first arm.
+    assert room.swept_links(np.zeros(4), np.array([0.0, 0.0, 0.0, 1.0])).tolist() == [
+        0.0,
+        0.0,
+        0.0,
+        80.0,
+    ]
+
+
+def test_a_torso_on_the_floor_does_not_hold_its_swinging_arm_to_measuring_again(monkeypatch):
+    floor = Obstacles.from_arrays(np.array([[-500.0, -20.0, 500.0, -20.0, 0.0]]), NO_CIRCLES)
+    # A torso standing 2 px above the floor, and an arm swinging high above it.
+    torso = Skeleton.tree([100.0, 80.0], [-1, 0], base_angle=UP, limits=[(-0.5, 0.5), None])
+    room = Clearance(torso, np.array([18.0, 5.0]), floor)
+    guide = Avoider(room)
+    calls = []
+    measure = room.gaps
+    monkeypatch.setattr(room, "gaps", lambda angles: calls.append(1) or measure(angles))
+    aim = TargetSet([1], [(-60.0, 150.0)])
+    for swing in np.linspace(0.0, 1.0, 30):
+        pose = np.array([0.0, swing])
+        answer = Solution(np.array([0.0, swing + 0.05]), SolveStatus.SUCCESS, 3, 1.0)
+        assert guide.steer(pose, answer, aim, 0.5) is answer
+    assert len(calls) == 1
+
+
 def test_polish_turns_an_answer_through_the_shelf_into_a_clear_one_that_arrives():
     room = _shelf_room()
     target = np.array([290.0, 45.0])  # under the shelf, near its far end

@@ -182,8 +182,10 @@ def test_converges_on_reachable_targets_of_free_chains(name, data):
     line = np.array([math.cos(chain.base_angle), math.sin(chain.base_angle)])
     offset = target - chain.base
     assume(abs(line[0] * offset[1] - line[1] * offset[0]) > 1e-3 * chain.reach)
-    sol = SOLVERS[name](chain, start, target, max_iterations=300, tolerance=tolerance)
-    _assert_sound(chain, sol, target, 300, tolerance)
+    # Converging is what is asserted, not how fast: CCD crawls toward a target near full reach
+    # behind a short first link (lengths 5 and 45, a target 48.7 px out: 306 iterations).
+    sol = SOLVERS[name](chain, start, target, max_iterations=1000, tolerance=tolerance)
+    _assert_sound(chain, sol, target, 1000, tolerance)
     assert sol.status is SolveStatus.SUCCESS
 
 

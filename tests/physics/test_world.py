@@ -117,3 +117,35 @@ def test_a_prop_blowing_up_counts_as_divergence():
     assert not world.diverged()
     world.prop_bodies[0].position = (math.inf, 0.0)
     assert world.diverged()
+
+
+def test_a_short_chain_gets_the_loads_over_floats_that_numpy_gives(monkeypatch):
+    world = World(_level([{"length": 40.0, "repeat": 6}], gravity=(0.0, -900.0)))
+    rng = np.random.default_rng(4)
+    for _ in range(5):
+        world.step(1 / 240)
+        world.joint_state()
+        torques, forces = rng.normal(size=6) * 1e4, rng.normal(size=(6, 2)) * 1e3
+        world.drive(np.zeros(6), torques, forces, np.full(6, 1e5))
+        floats = world._rows.loads.copy()
+        monkeypatch.setattr("ikgame.physics.world.FLOAT_LINKS", 0)
+        world.drive(np.zeros(6), torques, forces, np.full(6, 1e5))
+        monkeypatch.undo()
+        assert np.any(floats) and np.array_equal(floats, world._rows.loads)
+
+
+@pytest.mark.parametrize("speed", np.linspace(5.0, 60.0, 12).tolist())
+def test_a_joint_knocked_toward_its_stop_halts_at_it_not_a_step_past_it(speed):
+    # pymunk's limit acts only once a joint is past it, after the velocity the step before left
+    # it with has moved it on: unbraced, these knocks (far faster than the joint's motor turns
+    # it) carried the joint up to 1.9 deg past its stop, and the push back sent it 3 deg away.
+    limited = {"length": 100.0, "limits": [-30.0, 30.0], "max_speed": 30.0}
+    world = World(_level([{"length": 100.0}, limited]))
+    world.motors[1].max_force = 0.0  # nothing but the stop brakes the joint
+    world.bodies[1].angular_velocity = speed  # rad/s
+    angles = []
+    for _ in range(120):
+        world.step(1 / 240)
+        angles.append(world.joint_angles()[1])
+    assert max(angles) <= math.radians(30.0) + math.radians(0.05)
+    assert angles[-1] == pytest.approx(math.radians(30.0), abs=math.radians(0.5))
