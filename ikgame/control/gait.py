@@ -170,7 +170,9 @@ class Terrain:
         >>> Terrain(circles=[[0.0, 0.0, 10.0]]).heights([0.0, 6.0, 20.0], 50.0)
         array([10.,  8., nan])
         """
-        x, top = np.broadcast_arrays(np.asarray(xs, dtype=float), np.asarray(y_from, dtype=float))
+        x, top = np.asarray(xs, dtype=float), np.asarray(y_from, dtype=float)
+        if x.shape != top.shape:
+            x, top = np.broadcast_arrays(x, top)
         if x.size <= _FEW_RAYS:
             found = [
                 self._height(*ray)
