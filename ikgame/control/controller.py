@@ -188,7 +188,7 @@ class Controller:
             base_velocity, spin = base_motion
             arms = points - skeleton.base
             velocity = velocity - base_velocity - spin * np.column_stack((-arms[:, 1], arms[:, 0]))
-        if not np.any(velocity):
+        if not velocity.any():
             return None
         if links is None:
             arms = jacobian(skeleton, measured)

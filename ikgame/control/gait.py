@@ -12,6 +12,8 @@ Positions are world px (y up), angles radians, times s.
 
 from __future__ import annotations
 
+import bisect
+import itertools
 import math
 import numbers
 from collections.abc import Mapping, Sequence
@@ -28,6 +30,10 @@ PATH_SAMPLES: Final = 64
 
 SINK_DEPTH: Final = 10.0
 """How deep below the ground (px) :class:`Footing` can see a foot sink."""
+
+_FEW_RAYS: Final = 16
+"""Up to this many rays, :meth:`Terrain.heights` casts them one by one in Python floats (as many
+as a tick casts, one per foot), where numpy's per-call overhead costs more than the arithmetic."""
 
 STILL: Final = 1e-6
 """A rest spot moving slower than this sideways (px/s) is standing still."""
@@ -127,6 +133,35 @@ class Terrain:
         self._edge_low = np.minimum(corners[..., 1], ends[..., 1])
         self._edge_high = np.maximum(corners[..., 1], ends[..., 1])
         self._discs = np.concatenate([np.hstack([a, radius]), np.hstack([b, radius]), circs])
+        # The same as Python floats, for the few rays a tick casts (see _height), each part
+        # with the x range outside which no ray can meet it.
+        disc_rows = [
+            (*_x_range(cx - r, cx + r), cx, cy, r * r) for cx, cy, r in self._discs.tolist()
+        ]
+        edge_rows = [
+            (*_x_range(min(xs), max(xs)), list(zip(xs, *rows, strict=True)))
+            for xs, *rows in zip(
+                self._edge_start[..., 0].tolist(),
+                self._edge_start[..., 1].tolist(),
+                self._edge_dx.tolist(),
+                self._edge_delta[..., 1].tolist(),
+                self._edge_vertical.tolist(),
+                self._edge_low.tolist(),
+                self._edge_high.tolist(),
+                strict=True,
+            )
+        ]
+        # The x axis cut at every part's range ends, with the parts whose range meets each
+        # cut (in their order here): a ray looks at its own cut's parts only.
+        self._cuts = sorted({end for row in disc_rows + edge_rows for end in row[:2]})
+        bounds = [-math.inf, *self._cuts, math.inf]
+        self._parts = [
+            (
+                [row for row in disc_rows if row[0] <= right and row[1] >= left],
+                [row for row in edge_rows if row[0] <= right and row[1] >= left],
+            )
+            for left, right in itertools.pairwise(bounds)
+        ]
 
     def heights(self, xs: ArrayLike, y_from: ArrayLike) -> np.ndarray:
         """:meth:`ground_below` for many rays at once (``xs`` and ``y_from`` broadcast
@@ -135,7 +170,15 @@ class Terrain:
         >>> Terrain(circles=[[0.0, 0.0, 10.0]]).heights([0.0, 6.0, 20.0], 50.0)
         array([10.,  8., nan])
         """
-        x, top = np.broadcast_arrays(np.asarray(xs, dtype=float), np.asarray(y_from, dtype=float))
+        x, top = np.asarray(xs, dtype=float), np.asarray(y_from, dtype=float)
+        if x.shape != top.shape:
+            x, top = np.broadcast_arrays(x, top)
+        if x.size <= _FEW_RAYS:
+            found = [
+                self._height(*ray)
+                for ray in zip(x.ravel().tolist(), top.ravel().tolist(), strict=True)
+            ]
+            return np.array(found, dtype=float).reshape(x.shape)
         x, top = x[..., None], top[..., None]
         cx, cy, r = self._discs.T
         half = r * r - (x - cx) ** 2
@@ -158,6 +201,39 @@ class Terrain:
         hit = np.maximum(disc_hit, rect_hit)
         return np.where(np.isfinite(hit), hit, np.nan)
 
+    def _height(self, x: float, top: float) -> float:
+        """One ray of :meth:`heights`, in Python floats: the same operations on each disc and
+        edge, in the same order, so the same results to the bit."""
+        discs, segments = self._parts[bisect.bisect_right(self._cuts, x)]
+        disc_hit = -math.inf
+        for lo, hi, cx, cy, rr in discs:
+            if not lo <= x <= hi:
+                continue
+            off = x - cx
+            half = rr - off * off
+            chord = math.sqrt(max(half, 0.0))
+            if half >= 0 and cy - chord <= top:
+                disc_hit = max(disc_hit, min(cy + chord, top))
+        rect_hit = -math.inf
+        for lo, hi, edges in segments:
+            if not lo <= x <= hi:
+                continue
+            high, low = -math.inf, math.inf
+            for sx, sy, dx, dy, vertical, edge_low, edge_high in edges:
+                across = x - sx
+                if vertical:
+                    if across == 0:
+                        high, low = max(high, edge_high), min(low, edge_low)
+                    continue
+                t = across / dx
+                if 0 <= t <= 1:
+                    ys = sy + t * dy
+                    high, low = max(high, ys), min(low, ys)
+            if low <= top:
+                rect_hit = max(rect_hit, min(high, top))
+        hit = max(disc_hit, rect_hit)
+        return hit if math.isfinite(hit) else math.nan
+
     def ground_below(self, x: float, y_from: float) -> float | None:
         """Where a ray cast straight down from ``(x, y_from)`` first meets an obstacle: its
         height, px, or None when nothing lies below. A ray that starts inside an obstacle meets
@@ -169,6 +245,13 @@ class Terrain:
         """
         hit = float(self.heights(x, y_from))
         return None if math.isnan(hit) else hit
+
+
+def _x_range(lo: float, hi: float) -> tuple[float, float]:
+    """``[lo, hi]`` widened by far more than rounding: a ray outside it cannot meet a part
+    spanning ``lo`` to ``hi``, however its arithmetic rounds."""
+    slack = 1e-6 * (abs(lo) + abs(hi) + 1.0)
+    return lo - slack, hi + slack
 
 
 def default_groups(legs: Sequence[str]) -> tuple[tuple[str, ...], ...]:
@@ -393,20 +476,25 @@ class Gait:
         stands for a tick at least."""
         params = self._params
         spots = self._rest_world(self._position, self._angle)
-        arm = spots - self._position
-        sideways = self._velocity[0] - self._spin * arm[:, 1]
-        direction = np.where(np.abs(sideways) > STILL, np.sign(sideways), 0.0)
-        gap = spots[:, 0] - self._planted[:, 0]
-        due = np.where(
-            direction != 0,
-            direction * gap > params.threshold,
-            np.abs(gap) > max(params.threshold, params.stride / 2),
-        )
+        # Python floats, elementwise as numpy would be: a handful of legs, every tick.
+        body_y = float(self._position[1])
+        velocity_x, spin = float(self._velocity[0]), self._spin
+        either_way = max(params.threshold, params.stride / 2)
+        direction: list[float] = []
+        due: list[bool] = []
+        for x, y, foot_x in zip(
+            spots[:, 0].tolist(), spots[:, 1].tolist(), self._planted[:, 0].tolist(), strict=True
+        ):
+            sideways = velocity_x - spin * (y - body_y)
+            heading = math.copysign(1.0, sideways) if abs(sideways) > STILL else 0.0
+            gap = x - foot_x
+            direction.append(heading)
+            due.append(heading * gap > params.threshold if heading != 0 else abs(gap) > either_way)
         for k in range(len(self._groups)):
             group = (self._turn + k) % len(self._groups)
-            if group != landed and due[self._members[group]].any():
+            if group != landed and any(due[i] for i in self._members[group].tolist()):
                 self._turn = (group + 1) % len(self._groups)
-                self._step = self._plan(group, time, direction)
+                self._step = self._plan(group, time, np.array(direction))
                 return
 
     def _plan(self, group: int, time: float, direction: np.ndarray) -> _Step:
@@ -470,7 +558,7 @@ class Footing:
         self._ground = ground
         self._settle = _number("settle", settle, positive=True)
         self._planted = dict.fromkeys(self._legs, False)
-        self._down: dict[str, np.ndarray | None] = dict.fromkeys(self._legs)
+        self._down: dict[str, tuple[float, float] | None] = dict.fromkeys(self._legs)
         self._steps = dict.fromkeys(self._legs, 0)
         self._landing = dict.fromkeys(self._legs, 0.0)
         self._slip = dict.fromkeys(self._legs, 0.0)
@@ -481,16 +569,16 @@ class Footing:
         at = np.array([positions[leg] for leg in self._legs], dtype=float)
         # Rays from a little above each foot: from higher up, the top of a wall the foot stands
         # beside would read as ground it sank into.
-        grounds = self._ground.heights(at[:, 0], at[:, 1] + SINK_DEPTH)
-        for j, leg in enumerate(self._legs):
-            where = at[j]
-            if not math.isnan(grounds[j]):
-                self._sink[leg] = max(self._sink[leg], float(grounds[j] - where[1]))
+        grounds = self._ground.heights(at[:, 0], at[:, 1] + SINK_DEPTH).tolist()
+        for leg, (x, y), ground in zip(self._legs, at.tolist(), grounds, strict=True):
+            if not math.isnan(ground):
+                self._sink[leg] = max(self._sink[leg], ground - y)
             foot = feet[leg]
             if not foot.planted:
                 self._planted[leg], self._down[leg] = False, None
                 continue
-            off = float(np.hypot(*(where - foot.point)))
+            foot_x, foot_y = foot.point.tolist()
+            off = float(np.hypot(x - foot_x, y - foot_y))
             if not self._planted[leg]:
                 self._planted[leg] = True
                 self._steps[leg] += 1
@@ -498,9 +586,9 @@ class Footing:
             down = self._down[leg]
             if down is None:
                 if off <= self._settle:
-                    self._down[leg] = where.copy()
+                    self._down[leg] = (x, y)
                 continue
-            self._slip[leg] = max(self._slip[leg], float(np.hypot(*(where - down))))
+            self._slip[leg] = max(self._slip[leg], float(np.hypot(x - down[0], y - down[1])))
 
     def as_dict(self) -> dict[str, dict[str, float | int]]:
         """Per leg: ``steps`` (plantings begun) and ``landing``, ``slip`` and ``sink`` (px, 6

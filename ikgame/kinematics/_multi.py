@@ -26,7 +26,7 @@ from ikgame.kinematics.skeleton import Skeleton, check_angles, tree_points
 from ikgame.kinematics.solver import Solution, Solver, SolveStatus
 from ikgame.kinematics.targets import TargetSet, columns
 
-__all__ = ["Problem", "prepare", "as_chain_solve", "STALL_GAIN"]
+__all__ = ["Layout", "Problem", "layout", "prepare", "as_chain_solve", "STALL_GAIN"]
 
 STALL_GAIN: Final = 1e-9
 """An iteration that lowers the weighted RMS error by less than this (px) has stalled.
@@ -39,26 +39,75 @@ _ROUNDING: Final = 1e-12
 """Relative slack on the objective when deciding that a bend out of a saddle lowered it."""
 
 
+class Layout:
+    """What a solve reads that depends only on the skeleton's links and limits and on which
+    links the targets name, with which weights: worked out once per skeleton and kept in its
+    memo (see :func:`layout`), so every array here is read-only."""
+
+    def __init__(self, skeleton: Skeleton, links: np.ndarray, weights: np.ndarray) -> None:
+        self.total_weight = float(weights.sum())
+        # Rows of the stacked Jacobian and error, each scaled by the square root of its weight:
+        # the weighted least-squares problem as a plain one.
+        self.row_scale = _read_only(np.repeat(np.sqrt(weights), 2))
+        self.mask = _read_only(skeleton.ancestors[links])
+        self.active = _read_only(self.mask.any(axis=0))
+        self.subtree_weight = _read_only(weights @ self.mask)
+        self.error_clamp = ERROR_CLAMP * skeleton.reach
+        self.has_limits = bool(skeleton.limited[self.active].any())
+        # The same as Python values, for the solvers that visit one joint at a time (where
+        # numpy's per-call overhead costs more than the arithmetic).
+        self.below: tuple[list[int], ...] = tuple(
+            np.flatnonzero(self.mask[:, i]).tolist() for i in range(skeleton.count)
+        )
+        self.free: list[bool] = (~skeleton.limited).tolist()
+        self.lower: list[float] = skeleton.lower.tolist()
+        self.upper: list[float] = skeleton.upper.tolist()
+        self.weight_list: list[float] = weights.tolist()
+
+
+_LAYOUTS_KEPT: Final = 32
+"""Target sets whose layouts a skeleton keeps; a script that keeps changing which effectors it
+aims at, or their weights, starts afresh past this many."""
+
+
+def layout(skeleton: Skeleton, targets: TargetSet) -> Layout:
+    """The :class:`Layout` of ``targets`` on ``skeleton``, from the skeleton's memo if there;
+    ``ValueError`` unless every targeted link is one of the skeleton's (checked once per
+    layout: the memo holds only links that passed)."""
+    key = ("layout", targets.links.tobytes(), targets.weights.tobytes())
+    memo = skeleton._memo
+    found = memo.get(key)
+    if found is None:
+        targets.check(skeleton)
+        if len(memo) >= _LAYOUTS_KEPT:
+            memo.clear()
+        found = memo[key] = Layout(skeleton, targets.links, targets.weights)
+    return found  # type: ignore[return-value]  # the memo holds a Layout under this key
+
+
+def _read_only(array: np.ndarray) -> np.ndarray:
+    array.setflags(write=False)
+    return array
+
+
 class Problem:
     """A skeleton and its targets, as the arrays a solve reads every iteration."""
 
     def __init__(self, skeleton: Skeleton, targets: TargetSet, tolerance: float) -> None:
-        targets.check(skeleton)
+        self.layout = shared = layout(skeleton, targets)  # checks the links, too
         self.skeleton = skeleton
         self.tolerance = tolerance
         self.links = targets.links
         self.points = targets.points
         self.weights = targets.weights
-        self.total_weight = float(targets.weights.sum())
-        # Rows of the stacked Jacobian and error, each scaled by the square root of its weight:
-        # the weighted least-squares problem as a plain one.
-        self.row_scale = np.repeat(np.sqrt(targets.weights), 2)
-        self.mask = skeleton.ancestors[targets.links]
-        self.active = self.mask.any(axis=0)
-        self.subtree_weight = targets.weights @ self.mask
+        self.total_weight = shared.total_weight
+        self.row_scale = shared.row_scale
+        self.mask = shared.mask
+        self.active = shared.active
+        self.subtree_weight = shared.subtree_weight
         self.root_points = skeleton.root_points()
-        self.error_clamp = ERROR_CLAMP * skeleton.reach
-        self.has_limits = bool(skeleton.limited[self.active].any())
+        self.error_clamp = shared.error_clamp
+        self.has_limits = shared.has_limits
 
     def pose(self, angles: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Link starts (n, 2), link ends (n, 2), px, and world angles (n,), radians."""
@@ -78,7 +127,7 @@ class Problem:
 
     def arrived(self, errors: np.ndarray) -> bool:
         """Whether every targeted end is within the tolerance."""
-        return bool(np.all(np.einsum("ij,ij->i", errors, errors) <= self.tolerance**2))
+        return bool((np.einsum("ij,ij->i", errors, errors) <= self.tolerance**2).all())
 
     def jacobian(self, starts: np.ndarray, ends: np.ndarray) -> np.ndarray:
         """(2k, n) stacked Jacobian with each target's rows scaled by sqrt(weight)."""

@@ -397,6 +397,8 @@ def _chain_points(skeleton: Skeleton, angles: np.ndarray) -> np.ndarray:
 def _wrap_free(skeleton: Skeleton, angles: np.ndarray) -> np.ndarray:
     """Free joints wrapped to [-pi, pi] as :func:`~ikgame.kinematics.ccd.wrap_angle` does;
     limited joints untouched, so none is ever moved the long way round through its limit."""
+    if skeleton.all_limited:
+        return angles.copy()
     wrapped = np.fmod(angles, _TWO_PI)
     wrapped[wrapped < -math.pi] += _TWO_PI
     wrapped[wrapped > math.pi] -= _TWO_PI

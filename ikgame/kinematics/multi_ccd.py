@@ -84,16 +84,13 @@ class _Passes:
     overhead costs more than the arithmetic), with the pass itself."""
 
     def __init__(self, problem: Problem) -> None:
-        skeleton = problem.skeleton
-        mask = problem.mask
-        self.below: list[list[int]] = [
-            np.flatnonzero(mask[:, i]).tolist() for i in range(skeleton.count)
-        ]
-        self.free: list[bool] = (~skeleton.limited).tolist()
-        self.lower: list[float] = skeleton.lower.tolist()
-        self.upper: list[float] = skeleton.upper.tolist()
+        shared = problem.layout
+        self.below = shared.below
+        self.free = shared.free
+        self.lower = shared.lower
+        self.upper = shared.upper
         self.tx, self.ty = (list(v) for v in zip(*problem.points.tolist(), strict=True))
-        self.weights: list[float] = problem.weights.tolist()
+        self.weights = shared.weight_list
         self.links = problem.links
         self.tolerance_sqr = problem.tolerance**2
 
@@ -103,6 +100,7 @@ class _Passes:
         Stops early once every target is within the tolerance.
         """
         tx, ty, weights = self.tx, self.ty, self.weights
+        below_of, free, lower, upper = self.below, self.free, self.lower, self.upper
         effectors = ends[self.links]
         px = effectors[:, 0].tolist()
         py = effectors[:, 1].tolist()
@@ -110,8 +108,14 @@ class _Passes:
         sy = starts[:, 1].tolist()
         new = angles.tolist()
         turned = False
+        tolerance_sqr = self.tolerance_sqr
+        # Whether each target is within the tolerance; a turn only changes those below it.
+        inside = [
+            (tx[j] - px[j]) ** 2 + (ty[j] - py[j]) ** 2 <= tolerance_sqr for j in range(len(px))
+        ]
+        # Comparisons below stand for max() and min() (the same picks, without the calls).
         for i in range(len(new) - 1, -1, -1):
-            below = self.below[i]
+            below = below_of[i]
             if not below:
                 continue
             jx, jy = sx[i], sy[i]
@@ -121,26 +125,28 @@ class _Passes:
                 qx, qy = tx[j] - jx, ty[j] - jy
                 dot += weights[j] * (rx * qx + ry * qy)
                 cross += weights[j] * (rx * qy - ry * qx)
-                longest = max(longest, rx * rx + ry * ry)
+                arm_sqr = rx * rx + ry * ry
+                if arm_sqr > longest:
+                    longest = arm_sqr
             rot = math.atan2(cross, dot)
             wanted = new[i] + rot
-            if self.free[i]:
+            if free[i]:
                 new[i] = wrap_angle(wanted)
             else:
-                clamped = min(max(wanted, self.lower[i]), self.upper[i])
+                clamped = lower[i] if lower[i] > wanted else wanted
+                if upper[i] < clamped:
+                    clamped = upper[i]
                 rot += clamped - wanted
                 new[i] = clamped
             cos_rot, sin_rot = math.cos(rot), math.sin(rot)
             for j in below:
                 rx, ry = px[j] - jx, py[j] - jy
-                px[j] = jx + cos_rot * rx - sin_rot * ry
-                py[j] = jy + sin_rot * rx + cos_rot * ry
+                px[j] = x = jx + cos_rot * rx - sin_rot * ry
+                py[j] = y = jy + sin_rot * rx + cos_rot * ry
+                inside[j] = (tx[j] - x) ** 2 + (ty[j] - y) ** 2 <= tolerance_sqr
             if not turned and abs(rot) * math.sqrt(longest) > TRIVIAL_ARC_LENGTH:
                 turned = True
-            if all(
-                (tx[j] - px[j]) ** 2 + (ty[j] - py[j]) ** 2 <= self.tolerance_sqr
-                for j in range(len(px))
-            ):
+            if all(inside):
                 break
         angles[:] = new
         return turned

@@ -39,7 +39,7 @@ def check_point(point: object, name: str = "target") -> np.ndarray:
         raise ValueError(f"{name} must be a pair of numbers (x, y), got {point!r}") from exc
     if arr.shape != (2,):
         raise ValueError(f"{name} must have shape (2,), got shape {arr.shape}")
-    if not np.all(np.isfinite(arr)):
+    if not np.isfinite(arr).all():
         raise ValueError(f"{name} must be finite, got {arr.tolist()}")
     return arr
 
@@ -56,7 +56,7 @@ def check_angles(angles: object, count: int) -> np.ndarray:
         raise ValueError(f"angles must be numbers, got {angles!r}") from exc
     if arr.shape != (count,):
         raise ValueError(f"angles must have shape ({count},), got shape {arr.shape}")
-    if not np.all(np.isfinite(arr)):
+    if not np.isfinite(arr).all():
         raise ValueError(f"angles must be finite, got {arr.tolist()}")
     return arr
 
@@ -265,6 +265,21 @@ class Skeleton:
         return mask
 
     @cached_property
+    def _paths(self) -> np.ndarray:
+        """``ancestors`` as 0.0 / 1.0 floats: the matrix products of :func:`tree_points` cast
+        it so on every call otherwise (the same products, so the same sums)."""
+        paths = self.ancestors.astype(float)
+        paths.setflags(write=False)
+        return paths
+
+    @cached_property
+    def _is_root(self) -> np.ndarray:
+        """(n, 1) bool: which links hang from the base, as a column."""
+        column = (self.parents < 0)[:, None]
+        column.setflags(write=False)
+        return column
+
+    @cached_property
     def roots(self) -> np.ndarray:
         """(n,) int, read-only: the root link each link hangs from (a root is its own).
 
@@ -276,22 +291,46 @@ class Skeleton:
         return roots
 
     def root_points(self) -> np.ndarray:
-        """(n, 2) world position of the joint of the root each link hangs from, px.
+        """(n, 2) world position of the joint of the root each link hangs from, px; read-only.
 
         >>> Skeleton.tree([1, 1], [-1, -1], base=(5, 0), base_angle=np.pi / 2,
         ...               root_offsets=[(0, 0), (2, 0)]).root_points().round(6).tolist()
         [[5.0, 0.0], [5.0, 2.0]]
         """
+        return self._root_points
+
+    @cached_property
+    def _root_points(self) -> np.ndarray:
+        """:meth:`root_points`, worked out once per base (:meth:`moved_to` drops it)."""
         if not self.has_root_offsets:
-            return np.broadcast_to(self.base, (self.count, 2))
-        c, s = np.cos(self.base_angle), np.sin(self.base_angle)
-        offsets = self.root_offsets[self.roots]
-        return self.base + offsets @ np.array(((c, s), (-s, c)))
+            points = np.full((self.count, 2), self.base)
+        else:
+            c, s = np.cos(self.base_angle), np.sin(self.base_angle)
+            offsets = self.root_offsets[self.roots]
+            points = self.base + offsets @ np.array(((c, s), (-s, c)))
+        points.setflags(write=False)
+        return points
+
+    @cached_property
+    def _memo(self) -> dict[object, object]:
+        """Work that depends only on the links and limits (a solver's set-up for a target set,
+        say), done once per skeleton: :meth:`moved_to` copies share it as they share those
+        arrays. Kept within the kinematics package."""
+        return {}
 
     @cached_property
     def limited(self) -> np.ndarray:
         """(n,) bool: which joints have a finite limit on either side."""
         return np.isfinite(self.lower) | np.isfinite(self.upper)
+
+    @cached_property
+    def all_limited(self) -> bool:
+        """True when every joint has a finite limit on either side (none wraps round).
+
+        >>> Skeleton.chain([1, 1], limits=[None, (-1.0, 1.0)]).all_limited
+        False
+        """
+        return bool(self.limited.all())
 
     @cached_property
     def reach(self) -> float:
@@ -317,6 +356,8 @@ class Skeleton:
         point = check_point(base, "base").copy()
         point.setflags(write=False)
         moved = copy.copy(self)
+        # The copy shares every cached value but the one that depends on the base.
+        moved.__dict__.pop("_root_points", None)
         object.__setattr__(moved, "base", point)
         if angle is not None:
             if not math.isfinite(angle):
@@ -332,7 +373,7 @@ class Skeleton:
         [0.5, 0.75, 0.0]
         """
         # np.add.accumulate is np.cumsum without its dispatch, which costs more on ten links.
-        path = np.add.accumulate(angles) if self.is_chain else self.ancestors @ angles
+        path = np.add.accumulate(angles) if self.is_chain else self._paths @ angles
         return path + self.base_angle
 
     def clamp(self, angles: np.ndarray) -> np.ndarray:
@@ -380,7 +421,7 @@ def tree_points(
     >>> tree_points(tree, np.array([0, 0.5 * np.pi, 0]), tree.root_points())[1].round(6).tolist()
     [[1.0, 0.0], [1.0, 1.0], [2.0, 0.0]]
     """
-    path = skeleton.ancestors
+    path = skeleton._paths
     world = path @ angles
     world += skeleton.base_angle
     steps = np.empty((skeleton.count, 2))
@@ -388,6 +429,5 @@ def tree_points(
     np.multiply(skeleton.lengths, np.sin(world), out=steps[:, 1])
     ends = path @ steps
     ends += root_points
-    parents = skeleton.parents
-    starts = np.where((parents < 0)[:, None], root_points, ends[parents])
+    starts = np.where(skeleton._is_root, root_points, ends[skeleton.parents])
     return starts, ends, world

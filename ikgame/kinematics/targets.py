@@ -15,6 +15,7 @@ Angles are radians, positions pixels.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -44,28 +45,22 @@ class TargetSet:
     weights: np.ndarray | None = None
 
     def __post_init__(self) -> None:
+        links = _checked_links(self.links)
+        k = links.shape[0]
         try:
-            links = np.array(self.links)
             points = np.array(self.points, dtype=float)
         except (TypeError, ValueError) as exc:
             raise ValueError(f"targets must be link indices and (x, y) points: {exc}") from exc
-        if links.ndim != 1 or links.shape[0] == 0:
-            raise ValueError(f"links must be a non-empty 1-D array, got shape {links.shape}")
-        if links.dtype.kind not in "iu":
-            raise ValueError(f"links must be integer link indices, got {links.tolist()}")
-        links = links.astype(np.int64)
-        k = links.shape[0]
-        if np.any(links < 0) or len(set(links.tolist())) != k:
-            raise ValueError(f"links must be distinct indices >= 0, got {links.tolist()}")
         if points.shape != (k, 2):
             raise ValueError(f"points must have shape ({k}, 2), got shape {points.shape}")
-        if not np.all(np.isfinite(points)):
+        if not np.isfinite(points).all():
             raise ValueError(f"points must be finite, got {points.tolist()}")
         weights = np.ones(k) if self.weights is None else np.array(self.weights, dtype=float)
         if weights.shape != (k,):
             raise ValueError(f"weights must have shape ({k},), got shape {weights.shape}")
-        if not np.all(np.isfinite(weights)) or np.any(weights <= 0):
-            raise ValueError(f"weights must be finite and > 0, got {weights.tolist()}")
+        listed = weights.tolist()
+        if not all(math.isfinite(w) and w > 0 for w in listed):
+            raise ValueError(f"weights must be finite and > 0, got {listed}")
         for name, value in (("links", links), ("points", points), ("weights", weights)):
             value.setflags(write=False)
             object.__setattr__(self, name, value)
@@ -81,11 +76,7 @@ class TargetSet:
         ...
         ValueError: target links must be < 2 (the skeleton's links), got [2]
         """
-        if np.any(self.links >= skeleton.count):
-            raise ValueError(
-                f"target links must be < {skeleton.count} (the skeleton's links), "
-                f"got {self.links.tolist()}"
-            )
+        _check_bound(self.links, skeleton.count)
 
 
 def stacked_jacobian(
@@ -103,12 +94,37 @@ def stacked_jacobian(
     [[20.0, 10.0, 0.0], [20.0, 0.0, 10.0]]
     """
     angles = check_angles(angles, skeleton.count)
-    # The links are checked as a target set's are; the points play no part.
-    chosen = TargetSet(links, np.zeros((len(links), 2)))
-    chosen.check(skeleton)
+    # The links are checked as a target set's are.
+    chosen = _checked_links(links)
+    _check_bound(chosen, skeleton.count)
     starts, ends, _ = tree_points(skeleton, angles, skeleton.root_points())
-    mask = skeleton.ancestors[chosen.links]
-    return columns(ends[chosen.links], starts, mask).reshape(-1, skeleton.count)
+    mask = skeleton.ancestors[chosen]
+    return columns(ends[chosen], starts, mask).reshape(-1, skeleton.count)
+
+
+def _checked_links(value: object) -> np.ndarray:
+    """``value`` as a new (k,) int64 array of distinct link indices >= 0, or ``ValueError``."""
+    try:
+        links = np.array(value)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"targets must be link indices and (x, y) points: {exc}") from exc
+    if links.ndim != 1 or links.shape[0] == 0:
+        raise ValueError(f"links must be a non-empty 1-D array, got shape {links.shape}")
+    if links.dtype.kind not in "iu":
+        raise ValueError(f"links must be integer link indices, got {links.tolist()}")
+    links = links.astype(np.int64, copy=False)
+    listed = links.tolist()
+    if min(listed) < 0 or len(set(listed)) != len(listed):
+        raise ValueError(f"links must be distinct indices >= 0, got {listed}")
+    return links
+
+
+def _check_bound(links: np.ndarray, count: int) -> None:
+    """``ValueError`` unless every one of ``links`` is below ``count``."""
+    if int(links.max()) >= count:
+        raise ValueError(
+            f"target links must be < {count} (the skeleton's links), got {links.tolist()}"
+        )
 
 
 def columns(effectors: np.ndarray, starts: np.ndarray, mask: np.ndarray) -> np.ndarray:

@@ -337,6 +337,29 @@ def test_the_vectorised_cast_matches_an_independent_one_on_random_obstacles():
         assert height == pytest.approx(expected, abs=1e-6, nan_ok=True)
 
 
+def test_a_few_rays_cast_one_by_one_give_the_batch_cast_to_the_bit():
+    # A tick casts a handful of rays in Python floats, a step plan many at once with numpy:
+    # the two must agree exactly, or a run would depend on how many feet it checks.
+    rng = np.random.default_rng(5)
+    segments = np.hstack([rng.uniform(-200, 200, (12, 4)), rng.uniform(0, 15, (12, 1))])
+    segments[0, 2:4] = segments[0, 0:2]  # a zero-length segment
+    segments[1, 2] = segments[1, 0]  # a vertical one
+    segments[2, 4] = 0.0  # a bare segment
+    circles = np.hstack([rng.uniform(-200, 200, (6, 2)), rng.uniform(1, 40, (6, 1))])
+    terrain = Terrain(segments, circles)
+    corners = terrain._edge_start[..., 0].ravel()
+    cuts = np.array(terrain._cuts)  # where the one-by-one cast changes the parts it looks at
+    xs = np.concatenate([rng.uniform(-220, 220, 400), corners, segments[:, [0, 2]].ravel(), cuts])
+    tops = rng.uniform(-250, 250, xs.shape[0])
+    many = terrain.heights(xs, tops)
+    few = np.concatenate(
+        [terrain.heights(xs[i : i + 3], tops[i : i + 3]) for i in range(0, len(xs), 3)]
+    )
+    assert np.isnan(many).any() and not np.isnan(many).all()
+    assert np.array_equal(few, many, equal_nan=True)
+    assert np.array_equal(np.signbit(few), np.signbit(many))
+
+
 def test_default_groups_alternate_down_each_side():
     assert default_groups(["a"]) == (("a",),)
     assert default_groups(["l", "r"]) == (("l",), ("r",))

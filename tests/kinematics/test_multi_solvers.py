@@ -113,6 +113,37 @@ def test_bad_input_raises_value_error(name):
         solve(tree, np.zeros(3), good, tolerance=-1.0)
 
 
+@pytest.mark.parametrize("name", NAMES)
+def test_set_up_kept_per_skeleton_changes_no_answer(name):
+    # A skeleton keeps each target set's set-up, and its moved copies share it: the answers
+    # must be those of a fresh skeleton, to the bit, whatever was solved on it before.
+    rng = np.random.default_rng(3)
+    solve = TARGET_SOLVERS[name]
+    tree = _random_tree(rng, limited=True, offsets=True)
+    links = tree.effectors
+    points = rng.normal(0.0, 60.0, (len(links), 2)) + tree.base
+    start = _pose_within_limits(rng, tree)
+    for weights in (np.ones(len(links)), rng.uniform(0.5, 3.0, len(links))):
+        targets = TargetSet(links, points, weights)
+        solve(tree, start, targets)
+        for base, angle in ((tree.base, tree.base_angle), ((10.0, -20.0), 0.7)):
+            moved = tree.moved_to(base, angle)
+            fresh = Skeleton.tree(
+                tree.lengths,
+                tree.parents,
+                base=base,
+                base_angle=angle,
+                limits=list(zip(tree.lower.tolist(), tree.upper.tolist(), strict=True)),
+                root_offsets=tree.root_offsets,
+            )
+            kept, anew = solve(moved, start, targets), solve(fresh, start, targets)
+            assert np.array_equal(kept.angles, anew.angles)
+            assert np.array_equal(kept.errors, anew.errors)
+            assert (kept.status, kept.iterations) == (anew.status, anew.iterations)
+    with pytest.raises(ValueError, match=rf"target links must be < {tree.count}"):
+        solve(tree, start, TargetSet([tree.count], [(1.0, 1.0)]))
+
+
 # -- reachable targets --------------------------------------------------------------------------
 
 

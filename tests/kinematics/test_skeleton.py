@@ -395,6 +395,23 @@ def test_moved_to_keeps_the_root_offsets():
     np.testing.assert_allclose(moved.root_points()[0], [-20.0, 20.0])
 
 
+@pytest.mark.parametrize("skeleton", [HIPS, Skeleton.tree([1.0, 1.0], [-1, 0])])
+def test_root_points_follow_every_move_of_the_base(skeleton):
+    # Root points are worked out once per skeleton: a moved copy must not keep the old ones.
+    before = skeleton.root_points()
+    moved = skeleton.moved_to((10.0, 20.0), 0.5)
+    turned = Skeleton.tree(
+        skeleton.lengths,
+        skeleton.parents,
+        base=(10.0, 20.0),
+        base_angle=0.5,
+        root_offsets=skeleton.root_offsets,
+    )
+    assert np.array_equal(moved.root_points(), turned.root_points())
+    assert np.array_equal(skeleton.root_points(), before)
+    assert np.array_equal(moved.moved_to(skeleton.base, 0.0).root_points(), before)
+
+
 @pytest.mark.parametrize(
     ("offsets", "message"),
     [
