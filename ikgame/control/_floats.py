@@ -72,12 +72,10 @@ class FloatPose:
 
     def __init__(self, inertia: FloatInertia, world_angles: np.ndarray) -> None:
         self.inertia_of = inertia
-        lx = inertia.length_array * np.cos(world_angles)
-        ly = inertia.length_array * np.sin(world_angles)
-        self.lx: list[float] = lx.tolist()
-        self.ly: list[float] = ly.tolist()
-        self.hx: list[float] = (0.5 * lx).tolist()
-        self.hy: list[float] = (0.5 * ly).tolist()
+        self.lx: list[float] = (inertia.length_array * np.cos(world_angles)).tolist()
+        self.ly: list[float] = (inertia.length_array * np.sin(world_angles)).tolist()
+        self.hx = [0.5 * x for x in self.lx]
+        self.hy = [0.5 * y for y in self.ly]
 
     def loads(
         self,
@@ -111,6 +109,11 @@ class FloatPose:
         if alpha is not None:
             spin = [s + i * a for s, i, a in zip(spin, tree.moments, alpha, strict=True)]
         return tree.beyond(spin), fx, fy
+
+    def turning(self, accelerations: list[float]) -> Loads:
+        """The loads of joint ``accelerations`` alone (rad/s^2, child - parent): :meth:`loads`
+        of their :meth:`~FloatInertia.along`."""
+        return self.loads(alpha=self.inertia_of.along(accelerations))
 
     def inertia(self) -> list[float]:
         """:meth:`Pose.inertia <ikgame.control.dynamics.Pose.inertia>` over lists."""
@@ -185,6 +188,24 @@ class _ChainPose(FloatPose):
                 # link.
                 own_x[i] = masses[i] * (jx - 0.5 * ax - gx)
                 own_y[i] = masses[i] * (jy - 0.5 * ay - gy)
+        return self._back(own_x, own_y, alpha)
+
+    def turning(self, accelerations: list[float]) -> Loads:
+        # loads(alpha=along(accelerations)) in the one pass out: the sum along starts from
+        # -0.0 too (the first link's own value, exactly, as along keeps it).
+        n = self.inertia_of.count
+        lx, ly, masses = self.lx, self.ly, self.inertia_of.masses
+        own_x, own_y, alpha = [0.0] * n, [0.0] * n, [0.0] * n
+        jx = jy = a = -0.0
+        for i in range(n):
+            a += accelerations[i]
+            alpha[i] = a
+            ax, ay = 0.0 + a * -ly[i], 0.0 + a * lx[i]
+            jx += ax
+            jy += ay
+            # (no gravity: subtracting loads' 0.0 for it changes no float)
+            own_x[i] = masses[i] * (jx - 0.5 * ax)
+            own_y[i] = masses[i] * (jy - 0.5 * ay)
         return self._back(own_x, own_y, alpha)
 
     def _back(self, own_x: list[float], own_y: list[float], alpha: list[float] | None) -> Loads:
