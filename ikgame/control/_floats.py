@@ -292,8 +292,13 @@ def fit_floats(
     """:func:`~ikgame.control.dynamics.fit_drive` over lists: the accelerations, the loads,
     which joints are saturated, and whether the loads are those of the motion."""
     # bias + push, the torques first: the forces are needed only when those fit.
-    torques = [b + p for b, p in zip(bias[0], push[0], strict=True)]
-    if all(abs(t) <= lim for t, lim in zip(torques, limits, strict=True)):
+    torques, fits = [], True
+    for b, p, lim in zip(bias[0], push[0], limits, strict=True):
+        t = b + p
+        torques.append(t)
+        if not abs(t) <= lim:
+            fits = False
+    if fits:
         fx = [b + p for b, p in zip(bias[1], push[1], strict=True)]
         fy = [b + p for b, p in zip(bias[2], push[2], strict=True)]
         return wanted, (torques, fx, fy), [False] * len(limits), True

@@ -251,6 +251,7 @@ class Servo:
         up, down, closing, carried, stalled = [], [], [], [], []
         stop_in, closing_total = math.inf, 0.0
         floor_share, brake_share, stall_speed = BRAKE_FLOOR, BRAKE_SHARE, STALL_SPEED
+        stall_time, sqrt = STALL_TIME, math.sqrt
         for lim, e, v, i, h, top, saturated, before, was_carried, was_stalled in zip(
             limits,
             errors,
@@ -272,18 +273,21 @@ class Servo:
             against = d if e > 0.0 else u
             floor = floor_share * lim / i
             brake = brake_share * (floor if floor > against else against)
-            slow = abs(before)
-            if saturated and v * e < 0.0 and abs(v) > (stall_speed if stall_speed > slow else slow):
+            if (
+                saturated
+                and v * e < 0.0
+                and abs(v) > (stall_speed if stall_speed > (slow := abs(before)) else slow)
+            ):
                 was_carried += dt
             else:
                 was_carried = 0.0
             carried.append(was_carried)
-            is_stalled = was_stalled or was_carried >= STALL_TIME
+            is_stalled = was_stalled or was_carried >= stall_time
             stalled.append(is_stalled)
             size = 0.0 if is_stalled else abs(e)
             by_gain = gain * size
             speed = by_gain if by_gain < top else top
-            by_brake = math.sqrt(2.0 * brake * size)
+            by_brake = sqrt(2.0 * brake * size)
             speed = by_brake if by_brake < speed else speed
             c = speed if e > 0.0 else -speed if e < 0.0 else 0.0 * speed if e == 0.0 else e
             closing.append(c)
