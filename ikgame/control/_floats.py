@@ -241,7 +241,8 @@ class _ChainPose(FloatPose):
         for i in range(n):
             x, y, m = lx[i], ly[i], masses[i]
             w += rates[i]
-            ax, ay = 0.0 - w * w * x, 0.0 - w * w * y
+            ww = w * w
+            ax, ay = 0.0 - ww * x, 0.0 - ww * y
             ax_sum += ax
             ay_sum += ay
             # (the swing's loads leave gravity out: subtracting 0.0 changes no float)
