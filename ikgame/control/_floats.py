@@ -72,12 +72,10 @@ class FloatPose:
 
     def __init__(self, inertia: FloatInertia, world_angles: np.ndarray) -> None:
         self.inertia_of = inertia
-        lx = inertia.length_array * np.cos(world_angles)
-        ly = inertia.length_array * np.sin(world_angles)
-        self.lx: list[float] = lx.tolist()
-        self.ly: list[float] = ly.tolist()
-        self.hx: list[float] = (0.5 * lx).tolist()
-        self.hy: list[float] = (0.5 * ly).tolist()
+        self.lx: list[float] = (inertia.length_array * np.cos(world_angles)).tolist()
+        self.ly: list[float] = (inertia.length_array * np.sin(world_angles)).tolist()
+        self.hx = [0.5 * x for x in self.lx]
+        self.hy = [0.5 * y for y in self.ly]
 
     def loads(
         self,
@@ -111,6 +109,11 @@ class FloatPose:
         if alpha is not None:
             spin = [s + i * a for s, i, a in zip(spin, tree.moments, alpha, strict=True)]
         return tree.beyond(spin), fx, fy
+
+    def turning(self, accelerations: list[float]) -> Loads:
+        """The loads of joint ``accelerations`` alone (rad/s^2, child - parent): :meth:`loads`
+        of their :meth:`~FloatInertia.along`."""
+        return self.loads(alpha=self.inertia_of.along(accelerations))
 
     def inertia(self) -> list[float]:
         """:meth:`Pose.inertia <ikgame.control.dynamics.Pose.inertia>` over lists."""
@@ -187,6 +190,24 @@ class _ChainPose(FloatPose):
                 own_y[i] = masses[i] * (jy - 0.5 * ay - gy)
         return self._back(own_x, own_y, alpha)
 
+    def turning(self, accelerations: list[float]) -> Loads:
+        # loads(alpha=along(accelerations)) in the one pass out: the sum along starts from
+        # -0.0 too (the first link's own value, exactly, as along keeps it).
+        n = self.inertia_of.count
+        lx, ly, masses = self.lx, self.ly, self.inertia_of.masses
+        own_x, own_y, alpha = [0.0] * n, [0.0] * n, [0.0] * n
+        jx = jy = a = -0.0
+        for i in range(n):
+            a += accelerations[i]
+            alpha[i] = a
+            ax, ay = 0.0 + a * -ly[i], 0.0 + a * lx[i]
+            jx += ax
+            jy += ay
+            # (no gravity: subtracting loads' 0.0 for it changes no float)
+            own_x[i] = masses[i] * (jx - 0.5 * ax)
+            own_y[i] = masses[i] * (jy - 0.5 * ay)
+        return self._back(own_x, own_y, alpha)
+
     def _back(self, own_x: list[float], own_y: list[float], alpha: list[float] | None) -> Loads:
         """The pass back: each joint carries its link's ``own`` force and everything beyond."""
         n = self.inertia_of.count
@@ -220,7 +241,8 @@ class _ChainPose(FloatPose):
         for i in range(n):
             x, y, m = lx[i], ly[i], masses[i]
             w += rates[i]
-            ax, ay = 0.0 - w * w * x, 0.0 - w * w * y
+            ww = w * w
+            ax, ay = 0.0 - ww * x, 0.0 - ww * y
             ax_sum += ax
             ay_sum += ay
             # (the swing's loads leave gravity out: subtracting 0.0 changes no float)
@@ -271,8 +293,13 @@ def fit_floats(
     """:func:`~ikgame.control.dynamics.fit_drive` over lists: the accelerations, the loads,
     which joints are saturated, and whether the loads are those of the motion."""
     # bias + push, the torques first: the forces are needed only when those fit.
-    torques = [b + p for b, p in zip(bias[0], push[0], strict=True)]
-    if all(abs(t) <= lim for t, lim in zip(torques, limits, strict=True)):
+    torques, fits = [], True
+    for b, p, lim in zip(bias[0], push[0], limits, strict=True):
+        t = b + p
+        torques.append(t)
+        if not abs(t) <= lim:
+            fits = False
+    if fits:
         fx = [b + p for b, p in zip(bias[1], push[1], strict=True)]
         fy = [b + p for b, p in zip(bias[2], push[2], strict=True)]
         return wanted, (torques, fx, fy), [False] * len(limits), True

@@ -52,7 +52,7 @@ def joint_error(desired: np.ndarray, measured: np.ndarray, limited: np.ndarray) 
     error = np.asarray(desired, dtype=float) - measured
     if not limited.all():
         free = ~limited
-        error[free] = [wrap_angle(e) for e in error[free]]
+        error[free] = [wrap_angle(e) for e in error[free].tolist()]
     return error
 
 
@@ -294,7 +294,8 @@ class Controller:
             if self._all_limited:
                 start = np.array(measured, dtype=float)  # nothing to wrap
             else:
-                start = np.where(self._limited, measured, [wrap_angle(a) for a in measured])
+                wrapped = [wrap_angle(a) for a in np.asarray(measured, dtype=float).tolist()]
+                start = np.where(self._limited, measured, wrapped)
             solve = (
                 self.solver.solve_targets if isinstance(target, TargetSet) else self.solver.solve
             )

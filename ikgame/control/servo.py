@@ -249,8 +249,9 @@ class Servo:
         # Each step as in command, with numpy's maximum, minimum and sign written out (the same
         # floats: a sign times a speed is the speed, its negation, zero or NaN).
         up, down, closing, carried, stalled = [], [], [], [], []
-        stop_in = math.inf
+        stop_in, closing_total = math.inf, 0.0
         floor_share, brake_share, stall_speed = BRAKE_FLOOR, BRAKE_SHARE, STALL_SPEED
+        stall_time, sqrt = STALL_TIME, math.sqrt
         for lim, e, v, i, h, top, saturated, before, was_carried, was_stalled in zip(
             limits,
             errors,
@@ -272,40 +273,47 @@ class Servo:
             against = d if e > 0.0 else u
             floor = floor_share * lim / i
             brake = brake_share * (floor if floor > against else against)
-            slow = abs(before)
-            if saturated and v * e < 0.0 and abs(v) > (stall_speed if stall_speed > slow else slow):
+            if (
+                saturated
+                and v * e < 0.0
+                and abs(v) > (stall_speed if stall_speed > (slow := abs(before)) else slow)
+            ):
                 was_carried += dt
             else:
                 was_carried = 0.0
             carried.append(was_carried)
-            is_stalled = was_stalled or was_carried >= STALL_TIME
+            is_stalled = was_stalled or was_carried >= stall_time
             stalled.append(is_stalled)
             size = 0.0 if is_stalled else abs(e)
             by_gain = gain * size
             speed = by_gain if by_gain < top else top
-            by_brake = math.sqrt(2.0 * brake * size)
+            by_brake = sqrt(2.0 * brake * size)
             speed = by_brake if by_brake < speed else speed
             c = speed if e > 0.0 else -speed if e < 0.0 else 0.0 * speed if e == 0.0 else e
             closing.append(c)
-            if abs(c) > 1e-9:
-                stop = 2.0 * abs(e) / abs(c)
+            magnitude = abs(c)
+            closing_total += magnitude
+            if magnitude > 1e-9:
+                stop = 2.0 * abs(e) / magnitude
                 stop_in = stop if stop < stop_in else stop_in
         self._carried, self._stalled, self._velocities = carried, stalled, now
         # The loads of braking and of spinning are evaluated only when a bound on them (see
         # _Quiet) leaves any joint short of room: otherwise their factor is 1, exactly.
         quiet = self._quiet
-        if stop_in != math.inf:
-            braking = [-c / stop_in for c in closing]
-            if not quiet.brakes(braking):
-                halt = pose.loads(alpha=tree.along(braking))[0]
-                factor = _fit_floats(halt, held, limits, BRAKE_SHARE)
-                closing = [c * factor for c in closing]
+        if stop_in != math.inf and not quiet.brakes(closing_total / stop_in):
+            halt = pose.turning([-c / stop_in for c in closing])[0]
+            factor = _fit_floats(halt, held, limits, BRAKE_SHARE)
+            closing = [c * factor for c in closing]
         if goal_rates is not None:
             closing = [c + g for c, g in zip(closing, goal_rates.tolist(), strict=True)]
-        target = [(-s if -s > t else t) for t, s in zip(closing, speeds, strict=True)]
-        target = [(s if s < t else t) for t, s in zip(target, speeds, strict=True)]
+        target, target_total = [], 0.0
+        for t, s in zip(closing, speeds, strict=True):
+            t = -s if -s > t else t
+            t = s if s < t else t
+            target.append(t)
+            target_total += abs(t)
         factor = 1.0
-        if not quiet.spins(target):
+        if not quiet.spins(target_total):
             spin = pose.loads(omega=tree.along(target))[0]
             factor = _fit_floats(spin, held, limits, 1.0 - BRAKE_SHARE)
         accelerations = []
@@ -314,12 +322,10 @@ class Servo:
             wanted = slowest if slowest > wanted else wanted
             wanted = fastest if fastest < wanted else wanted
             accelerations.append((wanted - v) / dt)
-        push = pose.loads(alpha=tree.along(accelerations))
+        push = pose.turning(accelerations)
 
         def near(k: int) -> Loads:
-            return pose.loads(
-                alpha=tree.along([a if j <= k else 0.0 for j, a in enumerate(accelerations)])
-            )
+            return pose.turning([a if j <= k else 0.0 for j, a in enumerate(accelerations)])
 
         head = near if self._sections else None
         reached, loads, saturated, consistent = fit_floats(
@@ -369,16 +375,15 @@ class _Quiet:
             if brake > 0.0:
                 self._brake = min(self._brake, BRAKE_SHARE * floor / brake)
 
-    def spins(self, rates: list[float]) -> bool:
-        """True when the loads of joint ``rates`` alone (rad/s, child - parent) surely fit every
-        joint's room for them; False when they might not."""
-        total = math.fsum(map(abs, rates))
+    def spins(self, total: float) -> bool:
+        """True when the loads of joint rates (rad/s, child - parent) whose magnitudes sum to
+        ``total`` surely fit every joint's room for them; False when they might not."""
         return total * total <= self._spin
 
-    def brakes(self, accelerations: list[float]) -> bool:
-        """True when the loads of joint ``accelerations`` alone (rad/s^2) surely fit every
-        joint's room for braking; False when they might not."""
-        return math.fsum(map(abs, accelerations)) <= self._brake
+    def brakes(self, total: float) -> bool:
+        """True when the loads of joint accelerations whose magnitudes sum to ``total``
+        (rad/s^2) surely fit every joint's room for braking; False when they might not."""
+        return total <= self._brake
 
 
 def _sign(value: float) -> float:

@@ -363,24 +363,25 @@ class World:
         # Each body takes its joint's loads and the reactions of the joints at its end, all
         # acting at the link's ends, so the pivot forces turn it about its centre too. Bodies
         # other than links get no load: pymunk clears applied loads after every step.
+        feed_forward = None
         if rows.consecutive and self.count <= FLOAT_LINKS:
             # A short chain, link by link over floats (numpy's calls cost more than its sums):
             # the same operations as the arrays below.
             cos, sin = np.cos(angles).tolist(), np.sin(angles).tolist()
             t, f, halves = torques.tolist(), forces.tolist(), self._halves
-            n = len(t)
-            body = [0.0] * (3 * n)
-            for i in range(n):
-                fx, fy = f[i]
-                pair_x, pair_y, load_x, load_y, torque = fx, fy, fx, fy, t[i]
-                if i + 1 < n:
-                    next_x, next_y = f[i + 1]
-                    pair_x, pair_y = fx + next_x, fy + next_y
-                    load_x, load_y = fx - next_x, fy - next_y
-                    torque = torque - t[i + 1]
-                hx, hy = halves[i] * cos[i], halves[i] * sin[i]
-                body[3 * i : 3 * i + 3] = load_x, load_y, torque - (hx * pair_y - hy * pair_x)
-            loads[rows.links].reshape(-1)[:] = body  # a view: the links are consecutive rows
+            values: list[float] = []
+            # Each link but the last, with the joint at its end (zip stops one short).
+            for (fx, fy), (next_x, next_y), torque, next_t, h, c, s in zip(
+                f, f[1:], t, t[1:], halves, cos, sin, strict=False
+            ):
+                pair_x, pair_y = fx + next_x, fy + next_y
+                hx, hy = h * c, h * s
+                values += fx - next_x, fy - next_y, (torque - next_t) - (hx * pair_y - hy * pair_x)
+            fx, fy = f[-1]
+            hx, hy = halves[-1] * cos[-1], halves[-1] * sin[-1]
+            values += fx, fy, t[-1] - (hx * fy - hy * fx)
+            loads[rows.links].reshape(-1)[:] = values  # a view: the links are consecutive rows
+            feed_forward = t
         elif rows.consecutive:
             hx, hy = self._halves_array * np.cos(angles), self._halves_array * np.sin(angles)
             pair = forces.copy()
@@ -400,12 +401,14 @@ class World:
             pair += beyond_forces
             loads[rows.links, :2] = forces - beyond_forces
             loads[rows.links, 2] = torques - beyond_torques - (hx * pair[:, 1] - hy * pair[:, 0])
+        if feed_forward is None:
+            feed_forward = np.asarray(torques, dtype=float).tolist()
+        self._feed_forward = feed_forward
         pymunk.batch.set_space_bodies(self.space, _LOADS, rows.writes)
         for motor, rate, budget in zip(self.motors, rates.tolist(), budgets.tolist(), strict=True):
             # SimpleMotor drives (b.w - a.w) toward -rate.
             _SET_RATE(motor, -rate)
             _SET_MAX_FORCE(motor, budget)
-        self._feed_forward = np.asarray(torques, dtype=float).tolist()
 
     def motor_torques(self) -> np.ndarray:
         """(n,) magnitude of the torque each joint applied during the last step: feed-forward
@@ -420,7 +423,16 @@ class World:
 
     def torque_limited(self) -> np.ndarray:
         """(n,) bool: which joints were at their torque limit during the last step."""
-        return self.motor_torques() >= self.max_torque * (1.0 - 1e-6)
+        # motor_torques compared joint by joint: one array built, not three.
+        dt, share = self.last_dt, 1.0 - 1e-6
+        return np.array(
+            [
+                abs(f + _IMPULSE(m) / dt) >= limit * share
+                for f, m, limit in zip(
+                    self._feed_forward, self.motors, self.max_torque.tolist(), strict=True
+                )
+            ]
+        )
 
     def touching(self) -> bool:
         """True when any link of the chain is in contact with an obstacle or a prop."""
@@ -627,38 +639,42 @@ class _Stops:
     ) -> None:
         self.joints = {i: j for i, j in enumerate(limit_joints) if j is not None}
         """Each limited joint's limit joint, by link index."""
-        self.lower = np.array([-math.inf if j is None else j.min for j in limit_joints])
-        self.upper = np.array([math.inf if j is None else j.max for j in limit_joints])
-        self.max_speed = max_speed
+        self.lower = [-math.inf if j is None else float(j.min) for j in limit_joints]
+        self.upper = [math.inf if j is None else float(j.max) for j in limit_joints]
+        self.max_speed: list[float] = np.asarray(max_speed, dtype=float).tolist()
 
     def brace(self, angles: np.ndarray, velocities: np.ndarray, dt: float) -> list[int]:
         """Move the stops of the knocked joints that the next ``dt`` s step would leave heading
         past one; ``angles`` (radians) and ``velocities`` (rad/s) are every joint's before it.
         Returns the braced joints, for :meth:`release`."""
-        ahead = angles + (2.0 * dt) * velocities
-        low, high = ahead < self.lower, ahead > self.upper
-        if not (low.any() or high.any()):
-            return []
-        moved = angles + dt * velocities
-        knocked = np.abs(velocities) > self.max_speed
-        # A joint already past its stop is the limit joint's to push back, not to brace.
-        low &= knocked & (moved >= self.lower)
-        high &= knocked & (moved <= self.upper)
-        braced = np.flatnonzero(low | high).tolist()
-        for i in braced:
-            joint = self.joints[i]  # a free joint's bounds are infinite: never past them
-            # Strictly past the bound pymunk compares with, or the limit stays idle.
-            if low[i]:
-                joint.min = float(moved[i]) + _BRACE_RAD
-            else:
-                joint.max = float(moved[i]) - _BRACE_RAD
+        # Joint by joint over floats (the same sums as over arrays), the limited ones only: a
+        # free joint's bounds are infinite, never passed.
+        a, v = angles.tolist(), velocities.tolist()
+        lower, upper, speeds, twice = self.lower, self.upper, self.max_speed, 2.0 * dt
+        braced = []
+        for i, joint in self.joints.items():
+            angle, rate = a[i], v[i]
+            ahead = angle + twice * rate
+            low = ahead < lower[i]
+            if not (low or ahead > upper[i]) or not abs(rate) > speeds[i]:
+                continue
+            moved = angle + dt * rate
+            # A joint already past its stop is the limit joint's to push back, not to brace;
+            # strictly past the bound pymunk compares with, or the limit stays idle.
+            if low:
+                if moved >= lower[i]:
+                    braced.append(i)
+                    joint.min = moved + _BRACE_RAD
+            elif moved <= upper[i]:
+                braced.append(i)
+                joint.max = moved - _BRACE_RAD
         return braced
 
     def release(self, braced: list[int]) -> None:
         """Put the stops of the ``braced`` joints back at their limits."""
         for i in braced:
             joint = self.joints[i]
-            joint.min, joint.max = float(self.lower[i]), float(self.upper[i])
+            joint.min, joint.max = self.lower[i], self.upper[i]
 
 
 def _poses(bodies: list[pymunk.Body]) -> np.ndarray:

@@ -184,12 +184,12 @@ def test_loads_the_servo_skips_are_within_half_the_smallest_room(parents):
         pose = floats.pose(rng.uniform(-3, 3, n))
         scale = 10.0 ** rng.uniform(-3, 1)
         rates = (rng.normal(size=n) * scale).tolist()
-        if quiet.spins(rates):
+        if quiet.spins(sum(abs(r) for r in rates)):
             skipped[0] += 1
             torques = np.array(pose.loads(omega=floats.along(rates))[0])
             assert np.all(np.abs(torques) <= room / 2)
         accelerations = (rng.normal(size=n) * scale).tolist()
-        if quiet.brakes(accelerations):
+        if quiet.brakes(sum(abs(a) for a in accelerations)):
             skipped[1] += 1
             torques = np.array(pose.loads(alpha=floats.along(accelerations))[0])
             assert np.all(np.abs(torques) <= room / 2)
