@@ -180,23 +180,14 @@ class Clearance:
         self._a = caps[:, :2]
         self._b = caps[:, 2:4]
         self._r = caps[:, 4]
-        # How far a point moved by joint j can be from it (the longest way down from joint j
-        # through its subtree): the step bound of path checks.
-        lengths = skeleton.lengths
-        if skeleton.is_chain:
-            self._lever = np.cumsum(lengths[::-1])[::-1]
-        else:
-            lever = lengths.copy()
-            for i in range(skeleton.count - 1, -1, -1):
-                parent = skeleton.parents[i]
-                if parent >= 0:
-                    lever[parent] = max(lever[parent], lengths[parent] + lever[i])
-            self._lever = lever
         # How far a point of link i can be from joint j when j moves it (0 when it does not):
-        # the step bound link by link.
+        # the step bound of path checks link by link; over every link, the longest way down
+        # from joint j through its subtree.
+        lengths = skeleton.lengths
         anc = skeleton.ancestors
         depth = anc @ lengths  # each link's end, along its path from the base
         self._link_lever = np.where(anc, depth[:, None] - depth[None, :] + lengths[None, :], 0.0)
+        self._lever = self._link_lever.max(axis=0)
 
     # -- distances ---------------------------------------------------------------------------
 

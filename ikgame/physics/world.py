@@ -413,26 +413,24 @@ class World:
     def motor_torques(self) -> np.ndarray:
         """(n,) magnitude of the torque each joint applied during the last step: feed-forward
         plus its motor's correction (the motor's impulse / dt)."""
-        dt = self.last_dt
-        return np.array(
-            [
-                abs(f + _IMPULSE(m) / dt)
-                for f, m in zip(self._feed_forward, self.motors, strict=True)
-            ]
-        )
+        return np.array(self._applied())
 
     def torque_limited(self) -> np.ndarray:
         """(n,) bool: which joints were at their torque limit during the last step."""
-        # motor_torques compared joint by joint: one array built, not three.
-        dt, share = self.last_dt, 1.0 - 1e-6
+        share = 1.0 - 1e-6
         return np.array(
             [
-                abs(f + _IMPULSE(m) / dt) >= limit * share
-                for f, m, limit in zip(
-                    self._feed_forward, self.motors, self.max_torque.tolist(), strict=True
-                )
+                torque >= limit * share
+                for torque, limit in zip(self._applied(), self.max_torque.tolist(), strict=True)
             ]
         )
+
+    def _applied(self) -> list[float]:
+        """:meth:`motor_torques` as floats (a tick asks for them joint by joint)."""
+        dt = self.last_dt
+        return [
+            abs(f + _IMPULSE(m) / dt) for f, m in zip(self._feed_forward, self.motors, strict=True)
+        ]
 
     def touching(self) -> bool:
         """True when any link of the chain is in contact with an obstacle or a prop."""
