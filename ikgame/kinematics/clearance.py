@@ -26,7 +26,8 @@ width). A chain aims its end effector at a point; a tree aims a
 
 :class:`Avoider` does this tick by tick for a controller: it takes the solver's answer and
 returns the pose to command, keeping the clear answer and the route for the target until it
-moves, so they are searched once; a chain at rest or in the open costs a dot product a tick.
+moves, so they are searched once; a chain at rest or in the open costs two products of the
+links' levers a tick.
 While the base moves it plans nothing (a plan would be stale by the next tick). An answer
 arrives when every targeted end is within the tolerance of its target. Angles are radians,
 distances px.
@@ -561,8 +562,8 @@ class Avoider:
     Call :meth:`steer` with the measured pose, the solver's solution and the target every tick.
     It returns the solution unchanged when its pose is clear and the chain can turn to it in a
     clear straight line (measured again only when the joints could have used up the gap, so a
-    chain at rest costs a dot product); otherwise a clear answer for the target
-    (:meth:`Clearance.clear_answer`) and, when the straight way to it is blocked, the next via
+    chain at rest costs two products of the links' levers); otherwise a clear answer for the
+    target (:meth:`Clearance.clear_answer`) and, when the straight way to it is blocked, the next via
     pose of a route (:meth:`Clearance.route`), with status ``PROCESSING``. The clear answer and
     the route are kept until the target moves, so they are searched once (a chain resting short
     of the target for ``RELEASE_CALLS`` calls is handed back to the solver). When no clear
@@ -705,8 +706,8 @@ class Avoider:
         """Whether every link is so far from every obstacle that neither ``pose`` nor the way
         to it can bring it into one (link by link: a torso standing on the floor while its arms
         swing above is far enough). The gaps are measured afresh only when the motion since the
-        last measure could have used one up, so a chain at rest or in the open costs a dot
-        product."""
+        last measure could have used one up, so a chain at rest or in the open costs two products
+        of the links' levers with the joints' changes."""
         room = self.clearance
         ahead = room.swept_links(measured, pose)
         checked = self._checked
