@@ -563,8 +563,8 @@ class Avoider:
     It returns the solution unchanged when its pose is clear and the chain can turn to it in a
     clear straight line (measured again only when the joints could have used up the gap, so a
     chain at rest costs two products of the links' levers); otherwise a clear answer for the
-    target (:meth:`Clearance.clear_answer`) and, when the straight way to it is blocked, the next via
-    pose of a route (:meth:`Clearance.route`), with status ``PROCESSING``. The clear answer and
+    target (:meth:`Clearance.clear_answer`) and, when the straight way to it is blocked, the
+    next via pose of a route (:meth:`Clearance.route`), with status ``PROCESSING``. The clear answer and
     the route are kept until the target moves, so they are searched once (a chain resting short
     of the target for ``RELEASE_CALLS`` calls is handed back to the solver). When no clear
     answer or no route is found, the solver's own solution is returned for that target: the
