@@ -559,18 +559,18 @@ class Clearance:
 class Avoider:
     """Turns a solver's answer into a pose to command that keeps the chain clear, tick by tick.
 
-    Call :meth:`steer` with the measured pose, the solver's solution and the target every tick.
-    It returns the solution unchanged when its pose is clear and the chain can turn to it in a
-    clear straight line (measured again only when the joints could have used up the gap, so a
-    chain at rest costs two products of the links' levers); otherwise a clear answer for the
-    target (:meth:`Clearance.clear_answer`) and, when the straight way to it is blocked, the
-    next via pose of a route (:meth:`Clearance.route`), with status ``PROCESSING``. The clear answer and
-    the route are kept until the target moves, so they are searched once (a chain resting short
-    of the target for ``RELEASE_CALLS`` calls is handed back to the solver). When no clear
-    answer or no route is found, the solver's own solution is returned for that target: the
-    chain behaves as without obstacles (and a jammed one is reported blocked). With ``replan``,
-    a chain the motors carried off the planned line, whose straight way on to its via pose is
-    blocked from where it is, gets a new route from there.
+    Call :meth:`steer` with the measured pose, the solver's solution and the target every tick. It
+    returns the solution unchanged when its pose is clear and the chain can turn to it in a clear
+    straight line (measured again only when the joints could have used up the gap, so a chain at
+    rest costs two products of the links' levers); otherwise a clear answer for the target
+    (:meth:`Clearance.clear_answer`) and, when the straight way to it is blocked, the next via pose
+    of a route (:meth:`Clearance.route`), with status ``PROCESSING``. The clear answer and the route
+    are kept until the target moves, so they are searched once (a chain resting short of the target
+    for ``RELEASE_CALLS`` calls is handed back to the solver). When no clear answer or no route is
+    found, the solver's own solution is returned for that target: the chain behaves as without
+    obstacles (and a jammed one is reported blocked). With ``replan``, a chain the motors carried
+    off the planned line, whose straight way on to its via pose is blocked from where it is, gets a
+    new route from there.
 
     >>> arm = Skeleton.chain([100.0, 100.0], base_angle=math.pi / 2)
     >>> shelf = Obstacles.from_arrays(np.array([[-50.0, 150.0, 50.0, 150.0, 0.0]]), np.empty((0, 3)))
