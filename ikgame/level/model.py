@@ -156,7 +156,10 @@ def _invalid(loc: tuple[str | int, ...], message: str, value: object) -> Validat
 
 
 class _Model(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    # Validators are built when a model is first used, not at import: a run validates one
+    # Level, whose build covers every nested model, so building each of them on its own too
+    # would only cost start-up.
+    model_config = ConfigDict(extra="forbid", frozen=True, defer_build=True)
 
 
 class LevelInfo(_Model):
@@ -1419,7 +1422,10 @@ class Level(_Model):
     """
 
     level: LevelInfo = Field(description="Name, description, duration, expected status.")
-    world: WorldConfig = Field(WorldConfig(), description="Gravity, damping, clocks, camera.")
+    # model_construct: the defaults need no validation, so WorldConfig is not built on its own.
+    world: WorldConfig = Field(
+        WorldConfig.model_construct(), description="Gravity, damping, clocks, camera."
+    )
     chain: ChainConfig = Field(description="The motorised chain and its controller.")
     obstacles: list[Obstacle] = Field(
         default_factory=list, max_length=MAX_OBSTACLES, description="Static obstacles."
