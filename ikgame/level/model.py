@@ -1412,6 +1412,12 @@ def _check_script_effectors(level: Level) -> None:
                 raise _invalid(("script", i, "effector"), problem, step.effector)
 
 
+def _empty() -> list[Any]:
+    """A new empty list. (``default_factory=list`` would have pydantic read the signature of a
+    builtin, which compiles tokenize's regular expressions: a few ms of every start-up.)"""
+    return []
+
+
 class Level(_Model):
     """A whole level file. Load one with :func:`ikgame.level.loader.load_level`.
 
@@ -1428,13 +1434,15 @@ class Level(_Model):
     )
     chain: ChainConfig = Field(description="The motorised chain and its controller.")
     obstacles: list[Obstacle] = Field(
-        default_factory=list, max_length=MAX_OBSTACLES, description="Static obstacles."
+        default_factory=_empty, max_length=MAX_OBSTACLES, description="Static obstacles."
     )
     props: list[Prop] = Field(
-        default_factory=list, max_length=MAX_PROPS, description="Dynamic bodies the chain can push."
+        default_factory=_empty,
+        max_length=MAX_PROPS,
+        description="Dynamic bodies the chain can push.",
     )
     goals: list[Goal] = Field(
-        default_factory=list, max_length=MAX_GOALS, description="Regions props must end inside."
+        default_factory=_empty, max_length=MAX_GOALS, description="Regions props must end inside."
     )
     script: list[Step] = Field(
         min_length=1, max_length=MAX_STEPS, description="The steps, run in order."
