@@ -1,5 +1,6 @@
 """``python -m ikgame`` and the ``ikgame`` command: the command-line interface."""
 
+import gc
 import sys
 
 
@@ -11,7 +12,12 @@ def run() -> int:
     except KeyboardInterrupt:
         sys.stderr.write("interrupted: nothing was written\n")
         return 130
-    return main()
+    code = main()
+    # The command is done. At exit the interpreter would collect every module, class and
+    # validator it loaded and free them one by one (about 2% of a short run); frozen, they are
+    # left for the operating system to reclaim with the process. atexit handlers still run.
+    gc.freeze()
+    return code
 
 
 if __name__ == "__main__":
