@@ -1,12 +1,17 @@
 """``python -m ikgame`` and the ``ikgame`` command: the command-line interface."""
 
 import gc
+import os
 import sys
 
 
 def run() -> int:
     """:func:`ikgame.cli.main`, with a Ctrl-C while the command line loads reported in one line
     (exit 130) rather than as a traceback."""
+    # numpy's OpenBLAS starts a pool of threads as it loads, which takes longer (about 50 ms
+    # here) than the BLAS work of a run, whose matrices are a few rows of a chain's Jacobian.
+    # Set before numpy is imported; a value the user gives is kept.
+    os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
     try:
         from ikgame.cli import main
     except KeyboardInterrupt:
