@@ -335,7 +335,8 @@ class Simulation:
                 self.time + self.dt, self.dt, tuple(base.position), base.angle
             )
         target = self._goal()
-        self._release_if_moved(target)
+        base_motion = self.world.base_motion()
+        self._release_if_moved(target, carried=base_motion is not None)
         angles, velocities = self.world.joint_state()
         command = self.controller.command(
             angles,
@@ -343,7 +344,7 @@ class Simulation:
             velocities=velocities,
             gravity=self.world.gravity,
             dt=self.dt,
-            base_motion=self.world.base_motion(),
+            base_motion=base_motion,
         )
         drive = command.drive
         self.world.drive(drive.rates, drive.torques, drive.forces, drive.budgets)
@@ -361,7 +362,12 @@ class Simulation:
         errors, error = self._errors(target)
         limited = self.world.torque_limited()
         status = command.solution.status.value
-        if target is not None and self._blocked_target is None:
+        if base_motion is not None:
+            # A moving base moves every target relative to the chain, as a moving target does:
+            # there is no jam to judge until it stands still (and holding the joints would
+            # only let it carry the end effector away).
+            self._watch.reset()
+        elif target is not None and self._blocked_target is None:
             reachable = command.solution.status is not SolveStatus.FAILURE
 
             def pushing() -> bool:
@@ -432,12 +438,13 @@ class Simulation:
         if len(outcomes) > finished:
             self._blocked_in_step = False
 
-    def _release_if_moved(self, target: np.ndarray | TargetSet | None) -> None:
-        """A blocked chain tries again once a target has moved (or is handed back)."""
+    def _release_if_moved(self, target: np.ndarray | TargetSet | None, *, carried: bool) -> None:
+        """A blocked chain tries again once a target has moved (or is handed back), or the base
+        has begun to carry it (``carried``)."""
         blocked = self._blocked_target
         if blocked is None:
             return
-        if target is None or _moved_by(target, blocked) > self.controller.arrival:
+        if carried or target is None or _moved_by(target, blocked) > self.controller.arrival:
             self._blocked_target = None
             self._watch.reset()
             self.controller.release()
