@@ -104,6 +104,10 @@ class Servo:
         # Per joint, as lists: the float path (most chains) reads and writes them every tick.
         self._stalled = [False] * count
         self._saturated = [False] * count
+        # At its torque limit on the last tick or the one before: a joint that cannot hold its
+        # load can alternate between its limit and just under it as the motor and the
+        # feed-forward take turns, and is pushing all the same.
+        self._pushing = [False] * count
         self._velocities = [0.0] * count
         self._carried = [0.0] * count
         self._floats = FloatInertia(inertia) if inertia.count <= FLOAT_LINKS else None
@@ -129,6 +133,11 @@ class Servo:
         """Let joints that stalled at their torque limit push for their goals again: the target
         moved, or the world changed (gravity), so the goal may be within reach now."""
         self._stalled = [False] * len(self._stalled)
+
+    def _remember(self, saturated: list[bool]) -> None:
+        """Keep this tick's saturated joints, and which were pushing (see ``_pushing``)."""
+        self._pushing = [now or last for now, last in zip(saturated, self._saturated, strict=True)]
+        self._saturated = saturated
 
     def command(
         self,
@@ -170,7 +179,7 @@ class Servo:
         # means moving from the goal faster and faster for a while: an overshoot that the motor
         # is braking slows down instead, and is no stall.
         carried = (
-            np.array(self._saturated)
+            np.array(self._pushing)
             & (velocities * error < 0.0)
             & (np.abs(velocities) > np.maximum(np.abs(np.array(self._velocities)), STALL_SPEED))
         )
@@ -222,7 +231,7 @@ class Servo:
             # swing's own loads, clipped, would fight the pivots and fling a long chain apart.
             # Gravity and the wanted acceleration alone, and pymunk's pivots find the rest.
             drive = fit_drive(hold, push, wanted_acceleration, self.max_torque, head)
-        self._saturated = drive.saturated.tolist()
+        self._remember(drive.saturated.tolist())
         return ServoCommand(
             rates=velocities + drive.accelerations * dt,
             torques=drive.loads.torques,
@@ -252,14 +261,14 @@ class Servo:
         stop_in, closing_total = math.inf, 0.0
         floor_share, brake_share, stall_speed = BRAKE_FLOOR, BRAKE_SHARE, STALL_SPEED
         stall_time, sqrt = STALL_TIME, math.sqrt
-        for lim, e, v, i, h, top, saturated, before, was_carried, was_stalled in zip(
+        for lim, e, v, i, h, top, pushing, before, was_carried, was_stalled in zip(
             limits,
             errors,
             now,
             inertia,
             held,
             speeds,
-            self._saturated,
+            self._pushing,
             self._velocities,
             self._carried,
             self._stalled,
@@ -274,7 +283,7 @@ class Servo:
             floor = floor_share * lim / i
             brake = brake_share * (floor if floor > against else against)
             if (
-                saturated
+                pushing
                 and v * e < 0.0
                 and abs(v) > (stall_speed if stall_speed > (slow := abs(before)) else slow)
             ):
@@ -334,7 +343,7 @@ class Servo:
         if not consistent:
             # See command: gravity and the wanted acceleration alone, pymunk's pivots the rest.
             reached, loads, saturated, _ = fit_floats(hold, push, accelerations, limits, head)
-        self._saturated = saturated
+        self._remember(saturated)
         torques = loads[0]
         return ServoCommand(
             rates=np.array([v + a * dt for v, a in zip(now, reached, strict=True)]),
