@@ -26,8 +26,9 @@ width). A chain aims its end effector at a point; a tree aims a
 
 :class:`Avoider` does this tick by tick for a controller: it takes the solver's answer and
 returns the pose to command, keeping the clear answer and the route for the target until it
-moves, so they are searched once; a chain at rest or in the open costs two products of the
-links' levers a tick.
+moves, so they are searched once, and spreading each search over ticks by a budget of counted
+work (``SEARCH_BUDGET``) so that no tick carries a whole one; a chain at rest or in the open
+costs two products of the links' levers a tick.
 While the base moves it plans nothing (a plan would be stale by the next tick). An answer
 arrives when every targeted end is within the tolerance of its target. Angles are radians,
 distances px.
@@ -53,6 +54,7 @@ __all__ = [
     "PATH_STEP",
     "ROUTE_NODES",
     "RANDOM_SEEDS",
+    "ITERATION_UNITS",
     "SEARCH_BUDGET",
     "Avoider",
     "Clearance",
@@ -649,10 +651,11 @@ class Avoider:
     The search is spread over calls: each does at most ``budget`` units of its work (a unit per
     pose checked along a path, ``ITERATION_UNITS`` per polish iteration; a count, not a clock, so
     runs repeat exactly) and then stops until the next call, in the same order as all at once, so
-    it finds what one call would have found, a few calls later. While it runs (see
+    it finds what one call would have found, some calls later. While it runs (see
     :attr:`planning`) the chain goes on along the plan it has for an earlier target, if any, or
-    else holds the pose it was in when the search began (where the route will start), both with
-    status ``PROCESSING``. A search goes on when the target moves meanwhile (a target that moves
+    else holds the pose it was last sent to when that pose and the straight way to it are clear
+    (else the pose it was in when the search began, where the route will start), with status
+    ``PROCESSING``. A search goes on when the target moves meanwhile (a target that moves
     every tick would otherwise never get one): its plan is followed while one for the new target
     is searched for, and the chain is routed again from where it is when the first piece of a
     finished plan is not clear from there. It is dropped when the solver's answer needs none.

@@ -455,3 +455,15 @@ def test_a_target_that_moves_every_call_still_gets_a_plan_and_is_followed():
 def test_the_budget_is_a_positive_amount_of_work():
     with pytest.raises(ValueError, match="budget"):
         Avoider(_shelf_room(), budget=0)
+
+
+def test_while_it_searches_the_chain_keeps_to_the_clear_pose_it_was_last_sent_to():
+    room = _shelf_room()
+    guide = Avoider(room, budget=ITERATION_UNITS)
+    measured = np.array([0.5, 0.3, 0.2])
+    heading = Solution(np.array([0.4, 0.3, 0.2]), SolveStatus.SUCCESS, 3, 0.0)
+    assert guide.steer(measured, heading, np.array([-50.0, 350.0]), 0.5) is heading
+    through = Solution(np.array([-0.3, -1.2, -0.6]), SolveStatus.SUCCESS, 10, 0.0)
+    waiting = guide.steer(measured + 0.02, through, np.array([290.0, 45.0]), 0.5)
+    assert guide.planning and waiting.status is SolveStatus.PROCESSING
+    assert np.array_equal(waiting.angles, heading.angles)
