@@ -101,14 +101,19 @@ RELEASE_CALLS: Final = 120
 """Calls at rest on a clear goal after which the solver answers again even short of the target
 (half a second at 240 ticks/s)."""
 
-SEARCH_BUDGET: Final = 480
-"""Work an :class:`Avoider`'s search does in one call at most, before its last step: a unit per
-pose checked along a path, ``ITERATION_UNITS`` per polish iteration (about 4 ms on the shipped
-levels' skeletons)."""
+SEARCH_BUDGET: Final = 300
+"""Units of work an :class:`Avoider`'s search does in one call at most, before its last step (a
+unit is about 10 us of this machine's time: about 3 ms a call)."""
 
 ITERATION_UNITS: Final = 40
-"""Units of search work one polish iteration counts for: about what checking that many poses
-along a path costs."""
+"""Units of search work one polish iteration counts for."""
+
+CHECK_UNITS: Final = 15
+"""Units of search work one step of a path check counts for, besides its poses: a pose counts
+for ``POSE_UNITS`` per link and obstacle."""
+
+POSE_UNITS: Final = 0.05
+"""Units of search work a pose checked along a path counts for per link and obstacle."""
 
 PATH_CHUNK: Final = 100
 """Poses a path check measures in one step of a search."""
@@ -118,7 +123,7 @@ _MAX_SAMPLES: Final = 400
 
 
 _T = TypeVar("_T")
-_Work = Generator[int, None, _T]
+_Work = Generator[float, None, _T]
 """A search in steps: each yields the units of work it did, and the search returns its result."""
 
 
@@ -219,6 +224,7 @@ class Clearance:
         depth = anc @ lengths  # each link's end, along its path from the base
         self._link_lever = np.where(anc, depth[:, None] - depth[None, :] + lengths[None, :], 0.0)
         self._lever = self._link_lever.max(axis=0)
+        self._pose_units = POSE_UNITS * skeleton.count * len(obstacles)
 
     # -- distances ---------------------------------------------------------------------------
 
@@ -382,7 +388,7 @@ class Clearance:
         tolerance: float = 0.5,
         avoid: bool = True,
     ) -> _Work[Solution]:
-        """:meth:`polish`, one iteration (``ITERATION_UNITS`` of work) a step."""
+        """:meth:`polish`, an iteration (``ITERATION_UNITS`` of work) a step."""
         sk = self.skeleton
         pose = sk.clamp(np.asarray(angles, dtype=float).copy())
         links, points, scale = self._aim(target)
@@ -401,6 +407,8 @@ class Clearance:
                 gap, point, unit = self._pairs(pts)
             else:
                 gap = np.full((n, 0), math.inf)
+            # Counted here, before the iteration can end the polish, so every iteration counts.
+            yield ITERATION_UNITS
             misses = np.hypot(off[:, 0], off[:, 1])
             if len(links) == 1:
                 dist = float(misses[0])
@@ -434,7 +442,6 @@ class Clearance:
             if largest > _MAX_STEP:
                 step *= _MAX_STEP / largest
             pose = sk.clamp(pose + step)
-            yield ITERATION_UNITS
         status = SolveStatus.SUCCESS
         if best_key[0] > 0.0 or np.any(best_misses > tolerance):
             status = SolveStatus.PROCESSING
@@ -476,7 +483,8 @@ class Clearance:
         it (as long, obstacles ignored) brings no end more than ``tolerance`` nearer its
         target.
         """
-        return _finish(self._answering(measured, answer, target, tolerance))
+        found = _finish(self._answering(measured, answer, target, tolerance))
+        return None if found is None else found[0]
 
     def _answering(
         self,
@@ -484,8 +492,9 @@ class Clearance:
         answer: np.ndarray,
         target: np.ndarray | TargetSet,
         tolerance: float,
-    ) -> _Work[np.ndarray | None]:
-        """:meth:`clear_answer` in steps of work (see :class:`Avoider`)."""
+    ) -> _Work[tuple[np.ndarray, bool] | None]:
+        """:meth:`clear_answer` in steps of work (see :class:`Avoider`), with whether the
+        straight line to it from ``measured`` was checked clear."""
         measured = np.asarray(measured, float)
         found: list[np.ndarray] = []
         short: list[Solution] = []
@@ -496,7 +505,7 @@ class Clearance:
                     short.append(sol)
                 continue
             if (yield from self._checking(measured, sol.angles)):
-                return sol.angles
+                return sol.angles, True
             found.append(sol.angles)
         if not found and short:
             start = min(short, key=lambda sol: sol.error).angles
@@ -506,10 +515,10 @@ class Clearance:
                 nearest, target, iterations=FREE_ITERATIONS, tolerance=tolerance, avoid=False
             )
             gained = self.misses(nearest, target) - self.misses(free.angles, target)
-            return nearest if bool(np.all(gained <= tolerance)) else None
+            return (nearest, False) if bool(np.all(gained <= tolerance)) else None
         if not found:
             return None
-        return min(found, key=lambda pose: float(np.abs(pose - measured).sum()))
+        return min(found, key=lambda pose: float(np.abs(pose - measured).sum())), False
 
     # -- paths -------------------------------------------------------------------------------
 
@@ -533,15 +542,15 @@ class Clearance:
         return _finish(self._checking(a, b))
 
     def _checking(self, a: np.ndarray, b: np.ndarray) -> _Work[bool]:
-        """:meth:`path_clear`, ``PATH_CHUNK`` poses (a unit of work each) a step, stopping at
-        the first chunk that comes too close."""
+        """:meth:`path_clear`, ``PATH_CHUNK`` poses a step, stopping at the first chunk that
+        comes too close."""
         if not len(self.obstacles):
             return True
         poses = self._samples(np.asarray(a, float), np.asarray(b, float))
         bar = 0.0
         for first in range(0, len(poses), PATH_CHUNK):
             gaps = self.smallest_gaps(poses[first : first + PATH_CHUNK])
-            yield len(gaps)
+            yield CHECK_UNITS + len(gaps) * self._pose_units
             if first == 0:
                 # As _clear_along: a start already closer than the floor may only get farther.
                 bar = min(self.margin / 2.0, float(gaps[0]) - 1e-9)
@@ -648,12 +657,13 @@ class Avoider:
     off the planned line, whose straight way on to its via pose is blocked from where it is, gets a
     new route from there.
 
-    The search is spread over calls: each does at most ``budget`` units of its work (a unit per
-    pose checked along a path, ``ITERATION_UNITS`` per polish iteration; a count, not a clock, so
-    runs repeat exactly) and then stops until the next call, in the same order as all at once, so
+    The search is spread over calls: each does at most ``budget`` units of its work
+    (``ITERATION_UNITS`` per polish iteration, ``CHECK_UNITS`` per step of a path check and
+    ``POSE_UNITS`` per pose checked, link and obstacle; a count, not a clock, so runs repeat
+    exactly) and then stops until the next call, in the same order as all at once, so
     it finds what one call would have found, some calls later. While it runs (see
     :attr:`planning`) the chain goes on along the plan it has for an earlier target, if any, or
-    else holds the pose it was last sent to when that pose and the straight way to it are clear
+    else holds the pose it was last sent to, which it was heading for along a way checked clear
     (else the pose it was in when the search began, where the route will start), with status
     ``PROCESSING``. A search goes on when the target moves meanwhile (a target that moves
     every tick would otherwise never get one): its plan is followed while one for the new target
@@ -697,6 +707,7 @@ class Avoider:
         after the chain was found blocked)."""
         self._forget()
         self._commanded: np.ndarray | None = None
+        self._unchecked = False
 
     def _forget(self) -> None:
         """Forget the clear answer, the route and any search."""
@@ -726,8 +737,10 @@ class Avoider:
         """The solution to command this tick (see the class): ``target`` is a chain's point or
         a tree's :class:`~ikgame.kinematics.targets.TargetSet` (kept until any of its points
         moves)."""
+        self._unchecked = False
         steered = self._steer(measured, solution, target, tolerance)
-        self._commanded = steered.angles
+        # The solver's answer handed on unchecked is no pose to wait at.
+        self._commanded = None if self._unchecked else steered.angles
         return steered
 
     def _steer(
@@ -744,9 +757,11 @@ class Avoider:
             # next tick, so the solver answers until the base stands still again.
             self._skeleton = room.skeleton
             self.reset()
+            self._unchecked = True
             return solution
         key = _key(target)
         if key == self._given_up:
+            self._unchecked = True
             return solution
         search = self._search
         if search is None and self._goal is not None and key == self._target:
@@ -787,14 +802,12 @@ class Avoider:
     ) -> _Search:
         """Start a search from ``measured`` for the target of ``key`` (with ``reroute``, a new
         route for the current plan): the chain waits at the pose last commanded, which it was
-        heading for, if that pose and the straight way to it are clear, else where it is (for a
-        new route always: the way on from here is what was blocked)."""
+        heading for along a way checked clear, if there is one (not the solver's answer handed
+        on unchecked), else where it is (for a new route always: the way on from here is what
+        was blocked)."""
         start = np.array(measured, dtype=float)
         last = self._commanded
-        hold = start
-        if not (reroute or last is None):
-            if self.clearance.is_clear(last) and self._clear_way(start, last):
-                hold = last
+        hold = start if reroute or last is None else last
         self._search = _Search(key, work, start, hold, reroute)
         return self._search
 
@@ -811,13 +824,17 @@ class Avoider:
         start = np.array(start, dtype=float)
         arrival: float | np.ndarray = tolerance
         if goal is None:
-            goal = yield from room._answering(start, answer, target, tolerance)
-            if goal is None:
+            found = yield from room._answering(start, answer, target, tolerance)
+            if found is None:
                 return None
+            goal, straight = found
             # Ends a clear answer leaves short of targets out of reach arrive within
             # ``tolerance`` of where it leaves them.
             misses = room.misses(goal, target)
             arrival = np.where(misses > tolerance, misses + tolerance, tolerance)
+            if straight:
+                # The straight way to it was just checked clear: the route is that line.
+                return goal, [goal], arrival
         return (yield from self._rerouting(start, goal, arrival))
 
     def _rerouting(
@@ -842,6 +859,7 @@ class Avoider:
             # Searched once for this target: the solver's own answer it is, until it moves.
             self._drop()
             self._given_up = search.key
+            self._unchecked = True
             return solution
         self._target, (self._goal, self._way, self._tolerance) = search.key, plan
         moved = not np.array_equal(measured, search.start)
@@ -855,11 +873,17 @@ class Avoider:
         return self._follow(measured, solution)
 
     def _wait(self, search: _Search, measured: np.ndarray, solution: Solution) -> Solution:
-        """What to command while ``search`` runs: on along an earlier target's plan, or hold
-        (see :meth:`_begin`)."""
+        """What to command while ``search`` runs: the solver's answer still on its way, when it
+        and the straight way to it are clear (a pose on the way to the target, if no goal); else
+        on along an earlier target's plan; else hold (see :meth:`_begin`)."""
         pose = search.hold
-        if self._way and not search.reroute:
-            pose = self._follow(measured, solution).angles
+        if not search.reroute:
+            answer = solution.angles
+            on_its_way = solution.status is SolveStatus.PROCESSING
+            if on_its_way and self.clearance.is_clear(answer) and self._clear_way(measured, answer):
+                pose = answer
+            elif self._way:
+                pose = self._follow(measured, solution).angles
         return Solution(pose, SolveStatus.PROCESSING, solution.iterations, solution.error)
 
     def _drop(self) -> None:
