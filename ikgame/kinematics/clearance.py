@@ -54,7 +54,9 @@ __all__ = [
     "PATH_STEP",
     "ROUTE_NODES",
     "RANDOM_SEEDS",
+    "CHECK_UNITS",
     "ITERATION_UNITS",
+    "POSE_UNITS",
     "SEARCH_BUDGET",
     "Avoider",
     "Clearance",
@@ -662,10 +664,11 @@ class Avoider:
     ``POSE_UNITS`` per pose checked, link and obstacle; a count, not a clock, so runs repeat
     exactly) and then stops until the next call, in the same order as all at once, so
     it finds what one call would have found, some calls later. While it runs (see
-    :attr:`planning`) the chain goes on along the plan it has for an earlier target, if any, or
-    else holds the pose it was last sent to, which it was heading for along a way checked clear
-    (else the pose it was in when the search began, where the route will start), with status
-    ``PROCESSING``. A search goes on when the target moves meanwhile (a target that moves
+    :attr:`planning`), with status ``PROCESSING``, the chain heads for the solver's answer if
+    that is still on its way (``PROCESSING``) and it and the straight way to it are clear; else
+    it goes on along the plan it has for an earlier target, if any; else it holds the pose it
+    was last sent to, which it was heading for along a way checked clear (else the pose it was
+    in when the search began, where the route will start). A search goes on when the target moves meanwhile (a target that moves
     every tick would otherwise never get one): its plan is followed while one for the new target
     is searched for, and the chain is routed again from where it is when the first piece of a
     finished plan is not clear from there. It is dropped when the solver's answer needs none.

@@ -467,3 +467,22 @@ def test_while_it_searches_the_chain_keeps_to_the_clear_pose_it_was_last_sent_to
     waiting = guide.steer(measured + 0.02, through, np.array([290.0, 45.0]), 0.5)
     assert guide.planning and waiting.status is SolveStatus.PROCESSING
     assert np.array_equal(waiting.angles, heading.angles)
+
+
+def test_while_it_searches_the_chain_heads_for_an_answer_on_its_way_that_is_clear_to_turn_to():
+    room = _shelf_room()
+    guide = Avoider(room, budget=ITERATION_UNITS)
+    start = np.array([0.5, 0.3, 0.2])
+    through = Solution(np.array([-0.3, -1.2, -0.6]), SolveStatus.SUCCESS, 10, 0.0)
+    guide.steer(start, through, np.array([290.0, 45.0]), 0.5)
+    assert guide.planning
+    # Carried under the shelf meanwhile, the solver still on its way to a clear pose below it.
+    under = np.array([-0.503, -1.265, -0.115])
+    on_its_way = Solution(under + [0.0, -0.2, 0.0], SolveStatus.PROCESSING, 10, 30.0)
+    assert room.is_clear(on_its_way.angles) and room.path_clear(under, on_its_way.angles)
+    command = guide.steer(under, on_its_way, np.array([290.0, 45.0]), 0.5)
+    assert guide.planning and command.status is SolveStatus.PROCESSING
+    assert np.array_equal(command.angles, on_its_way.angles)
+    # An answer on its way through the shelf is not: the chain holds meanwhile.
+    blocked = Solution(through.angles, SolveStatus.PROCESSING, 10, 30.0)
+    assert np.array_equal(guide.steer(start, blocked, np.array([290.0, 45.0]), 0.5).angles, start)
