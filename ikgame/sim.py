@@ -361,7 +361,12 @@ class Simulation:
         errors, error = self._errors(target)
         limited = self.world.torque_limited()
         status = command.solution.status.value
-        if target is not None and self._blocked_target is None:
+        avoider = self.controller.avoider
+        if avoider is not None and avoider.planning:
+            # A chain waiting for its way round the obstacles is not jammed: its error stands
+            # still until the plan is found, and the first push after it is no sign of a jam.
+            self._watch.reset()
+        elif target is not None and self._blocked_target is None:
             reachable = command.solution.status is not SolveStatus.FAILURE
 
             def pushing() -> bool:
