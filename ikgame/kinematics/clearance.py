@@ -377,18 +377,15 @@ class Clearance:
         that mean distance. With ``avoid`` False the obstacles play no part (plain damped least
         squares).
         """
-        return _finish(
-            self._polishing(angles, target, iterations=iterations, tolerance=tolerance, avoid=avoid)
-        )
+        return _finish(self._polishing(angles, target, iterations, tolerance, avoid))
 
     def _polishing(
         self,
         angles: np.ndarray,
         target: np.ndarray | TargetSet,
-        *,
-        iterations: int = POLISH_ITERATIONS,
-        tolerance: float = 0.5,
-        avoid: bool = True,
+        iterations: int,
+        tolerance: float,
+        avoid: bool,
     ) -> _Work[Solution]:
         """:meth:`polish`, an iteration (``ITERATION_UNITS`` of work) a step."""
         sk = self.skeleton
@@ -501,7 +498,7 @@ class Clearance:
         found: list[np.ndarray] = []
         short: list[Solution] = []
         for start in self.seeds(measured, np.asarray(answer, float)):
-            sol = yield from self._polishing(start, target, tolerance=tolerance)
+            sol = yield from self._polishing(start, target, POLISH_ITERATIONS, tolerance, True)
             if sol.status is not SolveStatus.SUCCESS:
                 if isinstance(target, TargetSet) and self.is_clear(sol.angles):
                     short.append(sol)
@@ -512,10 +509,8 @@ class Clearance:
         if not found and short:
             start = min(short, key=lambda sol: sol.error).angles
             # Both polished to the end, so that they differ only where an obstacle is in the way.
-            nearest = (yield from self._polishing(start, target, iterations=FREE_ITERATIONS)).angles
-            free = yield from self._polishing(
-                nearest, target, iterations=FREE_ITERATIONS, tolerance=tolerance, avoid=False
-            )
+            nearest = (yield from self._polishing(start, target, FREE_ITERATIONS, 0.5, True)).angles
+            free = yield from self._polishing(nearest, target, FREE_ITERATIONS, tolerance, False)
             gained = self.misses(nearest, target) - self.misses(free.angles, target)
             return (nearest, False) if bool(np.all(gained <= tolerance)) else None
         if not found:
