@@ -37,15 +37,22 @@ __all__ = [
 def approach_overshoot(
     tips: np.ndarray, start: np.ndarray, target: np.ndarray, tolerance: float
 ) -> float | None:
-    """Largest distance past ``target`` along the approach, as % of the approach distance.
+    """Largest distance past ``target`` along the way the tip came in, as % of the approach.
 
-    The approach runs from ``start`` (the tip when the step began) to ``target``. Only the
-    ticks from the first one within ``tolerance`` of the target on count; None when the tip
-    never got there, or started within tolerance (no approach to overshoot).
+    The approach distance runs from ``start`` (the tip when the step began) to ``target``; the
+    tip came in along the line from where it was on the last tick before it first got within
+    ``tolerance`` to the target. Past means beyond the target along that line, from that first
+    tick on. A tip that sweeps in on a curve and settles has come in from the side, not along
+    the line from where the step began: measured along that line, the last few px of a curve
+    would read as going past. None when the tip never got there, or started within tolerance
+    (no approach to overshoot).
 
     >>> tips = np.array([[0.0, 0.0], [90.0, 0.0], [104.0, 0.0], [100.0, 0.0]])
     >>> approach_overshoot(tips, np.zeros(2), np.array([100.0, 0.0]), 6.0)
     4.0
+    >>> arc = np.array([[0.0, 0.0], [80.0, 40.0], [104.0, 8.0], [100.0, 0.0]])  # in from above
+    >>> approach_overshoot(arc, np.zeros(2), np.array([100.0, 0.0]), 9.0)
+    0.0
     """
     offset = target - start
     distance = float(np.hypot(*offset))
@@ -54,8 +61,12 @@ def approach_overshoot(
     inside = np.flatnonzero(np.hypot(*(tips - target).T) <= tolerance)
     if inside.size == 0:
         return None
-    direction = offset / distance
-    past = (tips[inside[0] :] - target) @ direction
+    first = int(inside[0])
+    came_from = tips[first - 1] if first > 0 else start
+    way_in = target - came_from
+    length = float(np.hypot(*way_in))
+    direction = offset / distance if length == 0.0 else way_in / length
+    past = (tips[first:] - target) @ direction
     return max(float(past.max()), 0.0) / distance * 100.0
 
 

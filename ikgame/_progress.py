@@ -4,9 +4,10 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
+from typing import TYPE_CHECKING
 
-from rich.console import Console
-from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
+if TYPE_CHECKING:
+    from rich.console import Console
 
 __all__ = ["progress_bar"]
 
@@ -21,6 +22,13 @@ def progress_bar(
     >>> with progress_bar("working", 10, enabled=False) as update:
     ...     update(5)
     """
+    if not enabled:
+        # No bar, no rich: importing it costs a short quiet run a noticeable part of its time.
+        yield _ignore
+        return
+    from rich.console import Console
+    from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
+
     bar = Progress(
         TextColumn(f"{label:<11}"),
         BarColumn(),
@@ -28,8 +36,11 @@ def progress_bar(
         TimeRemainingColumn(),
         console=console if console is not None else Console(stderr=True),
         transient=True,
-        disable=not enabled,
     )
     with bar:
         task = bar.add_task(label, total=total)
         yield lambda completed: bar.update(task, completed=completed)
+
+
+def _ignore(completed: float) -> None:
+    """The update of a bar that is not shown."""

@@ -19,7 +19,6 @@ import math
 import re
 import signal
 import sys
-import tempfile
 import threading
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
@@ -91,51 +90,55 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line with ``argv`` (default: ``sys.argv[1:]``); returns the exit code."""
     parser = _parser()
     args = parser.parse_args(argv)
-    err = _console(stderr=True)
     with _sigterm_raises():
-        return _handle(args, err)
+        return _handle(args)
 
 
-def _handle(args: argparse.Namespace, err: Console) -> int:
-    from rich.markup import escape
-
+def _handle(args: argparse.Namespace) -> int:
     from ikgame.level.loader import LevelError
 
     try:
         return args.handler(args)
     except LevelError as exc:
+        err = _console(stderr=True)
         for problem in exc.problems:
-            err.print(f"[bold red]error:[/] {escape(str(problem))}", soft_wrap=True)
+            err.print(f"[bold red]error:[/] {_escape(str(problem))}", soft_wrap=True)
         return EXIT_BAD_INPUT
     except UsageError as exc:
-        err.print(f"[bold red]error:[/] {escape(str(exc))}", soft_wrap=True)
+        _console(stderr=True).print(f"[bold red]error:[/] {_escape(str(exc))}", soft_wrap=True)
         return EXIT_BAD_INPUT
     except KeyboardInterrupt as exc:
         what = "terminated (SIGTERM)" if isinstance(exc, _Terminated) else "interrupted"
         notes = "; ".join(getattr(exc, "__notes__", ())) or "nothing was written"
-        err.print(escape(f"{what}: {notes}"), soft_wrap=True)
+        _console(stderr=True).print(_escape(f"{what}: {notes}"), soft_wrap=True)
         return EXIT_TERMINATED if isinstance(exc, _Terminated) else EXIT_INTERRUPTED
     except OSError as exc:
         if exc.errno not in _DISK_ERRORS or getattr(args, "debug", False):
-            return _internal(args, err, exc)
+            return _internal(args, exc)
         where = f" {exc.filename}" if exc.filename else ""
-        message = escape(f"cannot write{where}: {exc.strerror}")
-        err.print(f"[bold red]error:[/] {message}", soft_wrap=True)
+        message = _escape(f"cannot write{where}: {exc.strerror}")
+        _console(stderr=True).print(f"[bold red]error:[/] {message}", soft_wrap=True)
         return EXIT_BAD_INPUT
     except Exception as exc:  # the last line of defence: report, never a bare traceback
-        return _internal(args, err, exc)
+        return _internal(args, exc)
 
 
-def _internal(args: argparse.Namespace, err: Console, exc: Exception) -> int:
-    from rich.markup import escape
-
+def _internal(args: argparse.Namespace, exc: Exception) -> int:
     if getattr(args, "debug", False):
         raise exc
+    err = _console(stderr=True)
     err.print(
-        f"[bold red]internal error:[/] {type(exc).__name__}: {escape(_text(exc))}", soft_wrap=True
+        f"[bold red]internal error:[/] {type(exc).__name__}: {_escape(_text(exc))}", soft_wrap=True
     )
     err.print("rerun with --debug for the traceback, and please report it.")
     return EXIT_INTERNAL
+
+
+def _escape(text: str) -> str:
+    """``text`` with rich's markup escaped: rich is imported only for a message to print."""
+    from rich.markup import escape as escape_markup
+
+    return escape_markup(text)
 
 
 def _text(exc: BaseException) -> str:
@@ -146,12 +149,26 @@ def _text(exc: BaseException) -> str:
         return type(exc).__name__
 
 
-def _console(*, stderr: bool = False, quiet: bool = False) -> Console:
+def _console(*, stderr: bool = False, quiet: bool = False) -> Console | _Silent:
     """A console that prints text as written: no emoji codes (``:100:``), no highlighting;
-    markup only in the literals of this module, user text always goes through ``escape``."""
+    markup only in the literals of this module, user text always goes through ``_escape``.
+    Quiet, one that prints nothing and needs no rich."""
+    if quiet:
+        return _Silent()
     from rich.console import Console
 
-    return Console(stderr=stderr, quiet=quiet, highlight=False, emoji=False)
+    return Console(stderr=stderr, highlight=False, emoji=False)
+
+
+class _Silent:
+    """The console of a quiet command: prints nothing. rich takes longer to import than a short
+    level takes to run, and a quiet run has nothing to show with it."""
+
+    quiet = True
+    is_terminal = False
+
+    def print(self, *objects: object, **options: object) -> None:
+        """Print nothing."""
 
 
 @contextmanager
@@ -379,7 +396,7 @@ def _run_into(
     named: dict[str, Path],
     size: tuple[int, int],
     args: argparse.Namespace,
-    console: Console,
+    console: Console | _Silent,
 ) -> tuple[RunResult, dict[str, object], list[Path]]:
     """Simulate, export and write results.json last; a stop on the way leaves no results.json
     (and says so)."""
@@ -432,8 +449,6 @@ def _run_into(
 
 
 def _cmd_compare(args: argparse.Namespace) -> int:
-    from rich.markup import escape
-
     from ikgame._progress import progress_bar
     from ikgame.compare import compare_level, comparison_table, write_comparison
 
@@ -456,7 +471,7 @@ def _cmd_compare(args: argparse.Namespace) -> int:
         comparison = compare_level(level, solvers, progress=update)
     written = write_comparison(out, comparison)
     console.print(comparison_table(comparison))
-    console.print(f"wrote {escape(str(out))}/: {', '.join(p.name for p in written)}")
+    console.print(f"wrote {_escape(str(out))}/: {', '.join(p.name for p in written)}")
     return EXIT_OK
 
 
@@ -475,18 +490,16 @@ def _cmd_validate(args: argparse.Namespace) -> int:
 
 
 def _cmd_list(args: argparse.Namespace) -> int:
-    from rich.markup import escape
-
     from ikgame.level.tools import level_rows
 
     console = _console()
     for row in level_rows():
         ends = "" if row["expect"] == "passed" else f", meant to end {row['expect']}"
         console.print(
-            f"[bold]{Path(str(row['file'])).stem}[/]  {escape(str(row['name']))}  "
+            f"[bold]{Path(str(row['file'])).stem}[/]  {_escape(str(row['name']))}  "
             f"[dim]({row['links']} links, {row['steps']} steps, {row['solver']}{ends})[/]"
         )
-        console.print(f"    {escape(str(row['description']))}")
+        console.print(f"    {_escape(str(row['description']))}")
     console.print("\nrun one with: ikgame run NAME   (for example: ikgame run 02_tentacle)")
     return EXIT_OK
 
@@ -510,8 +523,6 @@ def _cmd_schema(args: argparse.Namespace) -> int:
 
 
 def _cmd_check(args: argparse.Namespace) -> int:
-    from rich.markup import escape
-
     from ikgame.provenance import differences, file_sha256
     from ikgame.render.output import parse_size
 
@@ -529,13 +540,16 @@ def _cmd_check(args: argparse.Namespace) -> int:
     console = _console(quiet=args.quiet)
     if (sha := file_sha256(level_path)) != prov["level_sha256"]:
         console.print(
-            escape(f"{level_path} has changed since the run (sha256 {sha[:12]}...)"), soft_wrap=True
+            _escape(f"{level_path} has changed since the run (sha256 {sha[:12]}...)"),
+            soft_wrap=True,
         )
         return EXIT_NOT_REPRODUCED
     level, theme, named = _load(level_path, options.theme)
     with _usage("size"):
         size = parse_size(options.size)
     _check_budget(estimate_run(level, frame_size=None if options.no_frames else size), args)
+    import tempfile
+
     with tempfile.TemporaryDirectory(prefix="ikgame-check-") as folder:
         _, again, _ = _run_into(
             Path(folder), level, level_path, theme, named, size, options, _console(quiet=True)
@@ -543,16 +557,16 @@ def _cmd_check(args: argparse.Namespace) -> int:
     found = differences(recorded, json.loads(json.dumps(again)))
     if found:
         console.print(
-            escape(f"{args.results}: does not reproduce; differences (recorded -> now):"),
+            _escape(f"{args.results}: does not reproduce; differences (recorded -> now):"),
             soft_wrap=True,
         )
         for line in found:
-            console.print(escape(f"  {line}"), soft_wrap=True)
+            console.print(_escape(f"  {line}"), soft_wrap=True)
         return EXIT_NOT_REPRODUCED
     frames = again["outputs"].get("frames", {}).get("count", 0)  # type: ignore[union-attr]
     extra = f", {frames} frames identical" if frames else ""
     console.print(
-        escape(f"{args.results}: reproduces exactly ({again['status']}{extra})"), soft_wrap=True
+        _escape(f"{args.results}: reproduces exactly ({again['status']}{extra})"), soft_wrap=True
     )
     return EXIT_OK
 
@@ -604,7 +618,7 @@ def _check_budget(estimate: RunEstimate, args: argparse.Namespace) -> None:
     )
 
 
-def _interactive(console: Console) -> bool:
+def _interactive(console: Console | _Silent) -> bool:
     return console.is_terminal and not console.quiet
 
 
@@ -657,8 +671,11 @@ def _results(
     return data
 
 
-def _print_summary(console: Console, result: RunResult, out: Path, written: list[Path]) -> None:
-    from rich.markup import escape
+def _print_summary(
+    console: Console | _Silent, result: RunResult, out: Path, written: list[Path]
+) -> None:
+    if console.quiet:
+        return
     from rich.table import Table
 
     colour = {"passed": "green", "failed": "yellow", "diverged": "red"}[result.status]
@@ -666,7 +683,7 @@ def _print_summary(console: Console, result: RunResult, out: Path, written: list
         "" if result.status == result.expect else f" [dim](designed to end {result.expect})[/]"
     )
     console.print(
-        f"[bold]{escape(result.level)}[/] ({result.solver}): [bold {colour}]{result.status}[/]"
+        f"[bold]{_escape(result.level)}[/] ({result.solver}): [bold {colour}]{result.status}[/]"
         f"{expected}, score {result.score:.0f}/100, after {result.sim_time:.2f} s simulated "
         f"({result.ticks} ticks)"
     )
@@ -679,7 +696,7 @@ def _print_summary(console: Console, result: RunResult, out: Path, written: list
         table.add_row(
             str(step.index + 1),
             step.kind,
-            "[green]passed[/]" if step.passed else f"[yellow]failed[/] {escape(step.note)}",
+            "[green]passed[/]" if step.passed else f"[yellow]failed[/] {_escape(step.note)}",
             "-" if step.time_to_reach is None else f"{step.time_to_reach:.2f}",
             " / ".join(f"{e:.1f}" for e in errors) or "-",
         )
@@ -687,10 +704,10 @@ def _print_summary(console: Console, result: RunResult, out: Path, written: list
         x, y = goal.final_position
         table.add_row(
             f"goal {goal.index + 1}",
-            escape(goal.name),
+            _escape(goal.name),
             "[green]passed[/]" if goal.passed else "[yellow]failed[/]",
             "-",
-            f"{escape(goal.prop)} ended at ({x:.0f}, {y:.0f})",
+            f"{_escape(goal.prop)} ended at ({x:.0f}, {y:.0f})",
         )
     console.print(table)
     if result.footing:
@@ -703,7 +720,7 @@ def _print_summary(console: Console, result: RunResult, out: Path, written: list
     frames = sum(1 for p in written if p.parent.name == "frames")
     others = [p.name for p in written if p.parent.name != "frames"]
     listed = ([f"frames/ ({frames} PNG)"] if frames else []) + others
-    console.print(f"wrote {escape(str(out))}/: {', '.join(listed)}")
+    console.print(f"wrote {_escape(str(out))}/: {', '.join(listed)}")
 
 
 # -- live commands: a window on a running level, and re-running a level as it is edited ----------
@@ -833,8 +850,6 @@ def _cmd_watch(
 ) -> int:
     """``stop`` and ``ready`` let a caller other than the terminal end the watch and know when
     it is in place (see :func:`ikgame.app.watch.watch_level`)."""
-    from rich.markup import escape
-
     from ikgame.level.tools import validate_files
 
     _extra("watchfiles", "watch", "ikgame watch")
@@ -860,7 +875,7 @@ def _cmd_watch(
     console = _console(quiet=args.quiet)
 
     def again() -> None:
-        console.print(f"\n[bold]{escape(level_path.name)}[/] changed: running it again")
+        console.print(f"\n[bold]{_escape(level_path.name)}[/] changed: running it again")
         if run() == EXIT_INTERRUPTED:
             raise KeyboardInterrupt
 
@@ -870,7 +885,7 @@ def _cmd_watch(
             raise KeyboardInterrupt
         if code != EXIT_OK and not validate_files([level_path]):
             return code  # the options are wrong, not the level: no edit to it can help
-        names = ", ".join(escape(str(path)) for path in sorted(level_files(level_path)))
+        names = ", ".join(_escape(str(path)) for path in sorted(level_files(level_path)))
         console.print(f"watching {names} for changes (Ctrl-C stops)")
         watch_level(level_path, again, stop=stop, ready=ready)
     except KeyboardInterrupt:

@@ -335,7 +335,8 @@ class Simulation:
                 self.time + self.dt, self.dt, tuple(base.position), base.angle
             )
         target = self._goal()
-        self._release_if_moved(target)
+        base_motion = self.world.base_motion()
+        self._release_if_moved(target, carried=base_motion is not None)
         angles, velocities = self.world.joint_state()
         command = self.controller.command(
             angles,
@@ -343,7 +344,7 @@ class Simulation:
             velocities=velocities,
             gravity=self.world.gravity,
             dt=self.dt,
-            base_motion=self.world.base_motion(),
+            base_motion=base_motion,
         )
         drive = command.drive
         self.world.drive(drive.rates, drive.torques, drive.forces, drive.budgets)
@@ -362,9 +363,12 @@ class Simulation:
         limited = self.world.torque_limited()
         status = command.solution.status.value
         avoider = self.controller.avoider
-        if avoider is not None and avoider.planning:
-            # A chain waiting for its way round the obstacles is not jammed: its error stands
-            # still until the plan is found, and the first push after it is no sign of a jam.
+        if base_motion is not None or (avoider is not None and avoider.planning):
+            # A moving base moves every target relative to the chain, as a moving target does:
+            # there is no jam to judge until it stands still (and holding the joints would
+            # only let it carry the end effector away). Nor is a chain waiting for its way
+            # round the obstacles jammed: its error stands still until the plan is found, and
+            # the first push after it is no sign of a jam.
             self._watch.reset()
         elif target is not None and self._blocked_target is None:
             reachable = command.solution.status is not SolveStatus.FAILURE
@@ -437,12 +441,13 @@ class Simulation:
         if len(outcomes) > finished:
             self._blocked_in_step = False
 
-    def _release_if_moved(self, target: np.ndarray | TargetSet | None) -> None:
-        """A blocked chain tries again once a target has moved (or is handed back)."""
+    def _release_if_moved(self, target: np.ndarray | TargetSet | None, *, carried: bool) -> None:
+        """A blocked chain tries again once a target has moved (or is handed back), or the base
+        has begun to carry it (``carried``)."""
         blocked = self._blocked_target
         if blocked is None:
             return
-        if target is None or _moved_by(target, blocked) > self.controller.arrival:
+        if carried or target is None or _moved_by(target, blocked) > self.controller.arrival:
             self._blocked_target = None
             self._watch.reset()
             self.controller.release()

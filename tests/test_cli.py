@@ -108,11 +108,21 @@ def test_version_loads_neither_the_simulation_nor_drawing(tmp_path):
 
 def test_run_without_frames_loads_no_drawing(tmp_path):
     out = tmp_path / "run"
-    code = f"from ikgame.cli import main\nassert main(['run', '--no-frames', '--quiet', '--out', {str(out)!r}]) == 0"
+    code = f"from ikgame.cli import main\nassert main(['run', '--no-frames', '--out', {str(out)!r}]) == 0"
     loaded = _modules_loaded_by(code, tmp_path)
     assert (out / "results.json").exists()
     assert "ikgame.sim" in loaded
     assert not loaded & (HEAVY - {"rich"})
+
+
+def test_a_quiet_run_loads_no_rich_either(tmp_path):
+    # A quiet run prints nothing: importing rich would cost it more than a short level runs.
+    out = tmp_path / "run"
+    code = f"from ikgame.cli import main\nassert main(['run', '--no-frames', '--quiet', '--out', {str(out)!r}]) == 0"
+    loaded = _modules_loaded_by(code, tmp_path)
+    assert (out / "results.json").exists() and (out / "motion.json").exists()
+    assert "ikgame.sim" in loaded
+    assert not loaded & HEAVY
 
 
 def test_run_writes_frames_gif_and_motion_that_show_the_chain_moving(tmp_path):

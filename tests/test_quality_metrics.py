@@ -53,6 +53,22 @@ def test_overshoot_looks_along_the_approach_only():
     assert metrics.approach_overshoot(tips, np.array([0.0, 97.0]), target, 6.0) is None
 
 
+def test_a_tip_curving_in_from_the_side_does_not_overshoot():
+    # Along a quarter circle round the target's side, closing in all the way: its last ticks lie
+    # beyond the target on the line from the start, yet the tip never went past it.
+    angle = np.linspace(0.0, math.pi / 2, 241)
+    radius = np.linspace(60.0, 0.0, 241)
+    target = np.array([100.0, 0.0])
+    tips = target + np.column_stack((radius * np.sin(angle), radius * np.cos(angle)))
+    start = np.array([100.0 - 60.0, 0.0])
+    assert np.all(np.diff(np.hypot(*(tips - target).T)) < 0.0)
+    assert metrics.approach_overshoot(tips, start, target, 6.0) == 0.0
+    # The same arc swinging on through the target and 8 px out the other side overshoots.
+    through = np.vstack((tips, target + np.linspace(0.1, 8.0, 20)[:, None] * [-1.0, 0.0]))
+    measured = metrics.approach_overshoot(through, start, target, 6.0)
+    assert measured is not None and measured > 5.0
+
+
 def test_rest_jitter_is_the_spread_about_the_mean():
     t = np.linspace(0.0, 0.5, 120, endpoint=False)
     still = np.tile([30.0, 40.0], (120, 1))

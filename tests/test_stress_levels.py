@@ -165,23 +165,31 @@ def _assert_each_target_alone_but_not_all_together(path, spec, step, where) -> N
 
 
 def _assert_no_pose_reaches_within_the_torque_budget(spec, step, where) -> None:
-    """Exhaustive over a 0.25 deg grid of a two-link chain's joint space."""
-    assert len(spec.lengths) == 2, where
-    grid = np.radians(np.arange(-180.0, 180.0, 0.25))
-    a, b = (g.ravel() for g in np.meshgrid(grid, grid))
-    inside = (a >= spec.lower[0]) & (a <= spec.upper[0]) & (b >= spec.lower[1])
-    inside &= b <= spec.upper[1]
-    a, b = a[inside], b[inside]
-    first = spec.base_angle + a
-    elbow = spec.base + spec.lengths[0] * np.column_stack((np.cos(first), np.sin(first)))
-    tip = elbow + spec.lengths[1] * np.column_stack((np.cos(first + b), np.sin(first + b)))
-    near = np.hypot(*(tip - step.reach).T) <= step.tolerance
-    assert near.any(), where  # within the chain's length: only the torque stands in the way
+    """Within the chain's length, yet every pose with its tip on the target needs more than the
+    base's torque to hold against gravity.
+
+    Under vertical gravity ``g`` the base holds ``|g| sum(w_i y_i)``, where ``y_i`` is link
+    ``i``'s horizontal extent (from ``-L_i`` to ``L_i``) and ``w_i`` half its own mass plus all
+    the mass beyond it. A tip within tolerance of the target puts ``sum(y_i)`` at least ``X``,
+    the target's horizontal distance from the base less the tolerance. The least such torque is
+    a linear programme answered greedily: every link starts folded back (``y_i = -L_i``), and
+    the extent still missing comes from the links whose unit costs least, which are the outer
+    ones (``w`` falls along the chain).
+    """
     assert spec.gravity[0] == 0.0, where
-    gravity_y = spec.gravity[1]
-    com_x = np.column_stack(((spec.base[0] + elbow[:, 0]) / 2, (elbow[:, 0] + tip[:, 0]) / 2))
-    base_torque = np.abs(gravity_y * (spec.masses * (com_x - spec.base[0])).sum(axis=1))
-    assert base_torque[near].min() > spec.max_torque[0], where
+    assert math.dist(step.reach, spec.base) < spec.reach, where  # only the torque is in the way
+    lengths, masses = np.asarray(spec.lengths), np.asarray(spec.masses)
+    weights = masses / 2 + (masses.sum() - np.cumsum(masses))
+    missing = abs(step.reach[0] - spec.base[0]) - step.tolerance + lengths.sum()
+    assert missing > 0.0, where
+    extents = -lengths.copy()
+    for i in reversed(range(len(lengths))):
+        raised = min(2 * lengths[i], missing)
+        extents[i] += raised
+        missing -= raised
+    assert missing <= 0.0, where
+    least = abs(spec.gravity[1]) * float(weights @ extents)
+    assert least > spec.max_torque[0], (where, least)
 
 
 def _creatures() -> list[Path]:

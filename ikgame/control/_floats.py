@@ -303,7 +303,9 @@ def fit_floats(
         fx = [b + p for b, p in zip(bias[1], push[1], strict=True)]
         fy = [b + p for b, p in zip(bias[2], push[2], strict=True)]
         return wanted, (torques, fx, fy), [False] * len(limits), True
-    scale, binding = _largest_factor(bias[0], push[0], limits)
+    scale, binding = None, 0
+    if all(abs(b) <= lim for b, lim in zip(bias[0], limits, strict=True)):
+        scale, binding = _largest_factor(bias[0], push[0], limits)
     if head is not None and scale is not None and binding < len(limits) - 1:
         near = head(binding)
         start = _affine(bias, near, 1.0)

@@ -328,7 +328,9 @@ def plan_drive(
     which leaves the physics engine nothing to reconcile.
 
     When even coasting needs more torque than some joint has (a load beyond a weak motor, a
-    knock from an obstacle), no factor helps. The chain is then given the loads of coasting, the
+    knock from an obstacle), no factor is taken: a fraction of the other joints' accelerations
+    could offload it for a tick, but they cannot keep accelerating, and propping a joint up that
+    way one tick and not the next lets it sag with torque to spare. The chain is then given the loads of coasting, the
     overloaded joints' clipped to their limits, the accelerations stay the wanted ones for the
     motors to strive for with what torque they have left, and the physics engine finds how the
     chain gives way: its implicit constraint solver is stable where an explicit answer from here
@@ -364,7 +366,9 @@ def fit_drive(
     full = bias + push
     if np.all(np.abs(full.torques) <= limit):
         return Drive(wanted, full, np.zeros(len(limit), dtype=bool))
-    scale, binding = _largest_factor(bias, push, limit)
+    scale, binding = None, 0
+    if np.all(np.abs(bias.torques) <= limit):
+        scale, binding = _largest_factor(bias, push, limit)
     if head is not None and scale is not None and binding < len(limit) - 1:
         near = head(binding)
         start = bias + near

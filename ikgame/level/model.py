@@ -156,7 +156,10 @@ def _invalid(loc: tuple[str | int, ...], message: str, value: object) -> Validat
 
 
 class _Model(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    # Validators are built when a model is first used, not at import: a run validates one
+    # Level, whose build covers every nested model, so building each of them on its own too
+    # would only cost start-up.
+    model_config = ConfigDict(extra="forbid", frozen=True, defer_build=True)
 
 
 class LevelInfo(_Model):
@@ -1409,6 +1412,12 @@ def _check_script_effectors(level: Level) -> None:
                 raise _invalid(("script", i, "effector"), problem, step.effector)
 
 
+def _empty() -> list[Any]:
+    """A new empty list. (``default_factory=list`` would have pydantic read the signature of a
+    builtin, which compiles tokenize's regular expressions: a few ms of every start-up.)"""
+    return []
+
+
 class Level(_Model):
     """A whole level file. Load one with :func:`ikgame.level.loader.load_level`.
 
@@ -1419,16 +1428,21 @@ class Level(_Model):
     """
 
     level: LevelInfo = Field(description="Name, description, duration, expected status.")
-    world: WorldConfig = Field(WorldConfig(), description="Gravity, damping, clocks, camera.")
+    # model_construct: the defaults need no validation, so WorldConfig is not built on its own.
+    world: WorldConfig = Field(
+        WorldConfig.model_construct(), description="Gravity, damping, clocks, camera."
+    )
     chain: ChainConfig = Field(description="The motorised chain and its controller.")
     obstacles: list[Obstacle] = Field(
-        default_factory=list, max_length=MAX_OBSTACLES, description="Static obstacles."
+        default_factory=_empty, max_length=MAX_OBSTACLES, description="Static obstacles."
     )
     props: list[Prop] = Field(
-        default_factory=list, max_length=MAX_PROPS, description="Dynamic bodies the chain can push."
+        default_factory=_empty,
+        max_length=MAX_PROPS,
+        description="Dynamic bodies the chain can push.",
     )
     goals: list[Goal] = Field(
-        default_factory=list, max_length=MAX_GOALS, description="Regions props must end inside."
+        default_factory=_empty, max_length=MAX_GOALS, description="Regions props must end inside."
     )
     script: list[Step] = Field(
         min_length=1, max_length=MAX_STEPS, description="The steps, run in order."

@@ -52,3 +52,28 @@ def test_a_jammed_arm_reports_blocked_holds_and_tries_again_when_the_target_move
     steps = sim.result.steps
     assert not steps[0].passed and "blocked" in steps[0].note
     assert steps[1].passed and steps[1].note == ""
+
+
+def test_a_moving_base_releases_a_blocked_arm_and_blocks_nothing_while_it_carries_it():
+    # The jammed arm above; then its base slides away with the target left where it was.
+    level = Level.model_validate(
+        {
+            "level": {"name": "carried", "duration": 6.0},
+            "world": {"gravity": [0.0, 0.0]},
+            "chain": {"angle": 0.0, "links": [{"length": 100.0, "repeat": 2}]},
+            "obstacles": [{"kind": "circle", "center": [150.0, 100.0], "radius": 25.0}],
+            "script": [
+                {"reach": [60.0, 170.0], "timeout": 3.0},
+                {"set": {"base": [-80.0, 0.0], "over": 1.0}},
+                {"wait": 2.0},
+            ],
+        }
+    )
+    sim = Simulation(level, record=False)
+    ticks = []
+    while not sim.done:
+        carried = sim.world.base_motion() is not None
+        ticks.append((carried, sim.step().solver_status))
+    assert ticks[int(2.9 * 240)][1] == "blocked"
+    moving = [status for carried, status in ticks if carried]
+    assert moving and "blocked" not in moving

@@ -198,6 +198,33 @@ def test_no_factor_is_taken_that_leaves_a_joint_past_its_limit():
     assert drive.saturated[0]
 
 
+def test_a_joint_that_cannot_hold_is_not_propped_up_by_the_others_accelerations():
+    # Held out sideways the base needs 8e5 against gravity and has 6e5. Swinging the outer link
+    # down hard enough would offload it for an instant (its reaction on the base), and a
+    # fraction of that swing fits every limit; but no joint can keep accelerating, and a servo
+    # that props the base up that way one tick and not the next lets the arm sag at two thirds
+    # of its torque. The base gives all it has instead.
+    arm = ChainInertia(np.array([100.0, 100.0]), np.full(2, 2.0), np.full(2, 2.0 * 100.0**2 / 12))
+    pose = Pose(arm, np.zeros(2))
+    bias = pose.loads(gravity=(0.0, -2000.0))
+    limit = np.array([6.0e5, 1.0e7])
+    wanted = np.array([0.0, -400.0])
+    push = pose.loads(alpha=arm.along(wanted))
+    rescue = bias.torques[0] + np.linspace(0.0, 1.0, 11) * push.torques[0]
+    assert np.any(np.abs(rescue) <= limit[0]) and abs(rescue[-1]) > limit[0]
+    drive = fit_drive(bias, push, wanted, limit)
+    assert drive.saturated[0] and not drive.consistent
+    assert drive.loads.torques[0] == pytest.approx(np.sign(bias.torques[0]) * limit[0])
+    floats = FloatInertia(arm).pose(np.zeros(2))
+    _, loads, saturated, consistent = fit_floats(
+        floats.loads(gravity=(0.0, -2000.0)),
+        floats.loads(alpha=FloatInertia(arm).along(wanted.tolist())),
+        wanted.tolist(),
+        limit.tolist(),
+    )
+    assert loads[0] == drive.loads.torques.tolist() and saturated[0] and not consistent
+
+
 # -- trees -------------------------------------------------------------------------------------
 
 Y_PARENTS = np.array([-1, 0, 0])  # a stem with two branches at its end
