@@ -362,10 +362,13 @@ class Simulation:
         errors, error = self._errors(target)
         limited = self.world.torque_limited()
         status = command.solution.status.value
-        if base_motion is not None:
+        avoider = self.controller.avoider
+        if base_motion is not None or (avoider is not None and avoider.planning):
             # A moving base moves every target relative to the chain, as a moving target does:
             # there is no jam to judge until it stands still (and holding the joints would
-            # only let it carry the end effector away).
+            # only let it carry the end effector away). Nor is a chain waiting for its way
+            # round the obstacles jammed: its error stands still until the plan is found, and
+            # the first push after it is no sign of a jam.
             self._watch.reset()
         elif target is not None and self._blocked_target is None:
             reachable = command.solution.status is not SolveStatus.FAILURE

@@ -26,8 +26,9 @@ width). A chain aims its end effector at a point; a tree aims a
 
 :class:`Avoider` does this tick by tick for a controller: it takes the solver's answer and
 returns the pose to command, keeping the clear answer and the route for the target until it
-moves, so they are searched once; a chain at rest or in the open costs two products of the
-links' levers a tick.
+moves, so they are searched once, and spreading each search over ticks by a budget of counted
+work (``SEARCH_BUDGET``) so that no tick carries a whole one; a chain at rest or in the open
+costs two products of the links' levers a tick.
 While the base moves it plans nothing (a plan would be stale by the next tick). An answer
 arrives when every targeted end is within the tolerance of its target. Angles are radians,
 distances px.
@@ -36,8 +37,9 @@ distances px.
 from __future__ import annotations
 
 import math
+from collections.abc import Generator
 from dataclasses import dataclass
-from typing import Final
+from typing import Final, TypeVar
 
 import numpy as np
 
@@ -52,6 +54,10 @@ __all__ = [
     "PATH_STEP",
     "ROUTE_NODES",
     "RANDOM_SEEDS",
+    "CHECK_UNITS",
+    "ITERATION_UNITS",
+    "POSE_UNITS",
+    "SEARCH_BUDGET",
     "Avoider",
     "Clearance",
     "Obstacles",
@@ -97,8 +103,39 @@ RELEASE_CALLS: Final = 120
 """Calls at rest on a clear goal after which the solver answers again even short of the target
 (half a second at 240 ticks/s)."""
 
+SEARCH_BUDGET: Final = 300
+"""Units of work an :class:`Avoider`'s search does in one call at most, before its last step (a
+unit is about 10 us of this machine's time: about 3 ms a call)."""
+
+ITERATION_UNITS: Final = 40
+"""Units of search work one polish iteration counts for."""
+
+CHECK_UNITS: Final = 15
+"""Units of search work one step of a path check counts for, besides its poses: a pose counts
+for ``POSE_UNITS`` per link and obstacle."""
+
+POSE_UNITS: Final = 0.05
+"""Units of search work a pose checked along a path counts for per link and obstacle."""
+
+PATH_CHUNK: Final = 100
+"""Poses a path check measures in one step of a search."""
+
 _MAX_STEP: Final = 0.2
 _MAX_SAMPLES: Final = 400
+
+
+_T = TypeVar("_T")
+_Work = Generator[float, None, _T]
+"""A search in steps: each yields the units of work it did, and the search returns its result."""
+
+
+def _finish(work: _Work[_T]) -> _T:
+    """Run a search to its end, all at once."""
+    while True:
+        try:
+            next(work)
+        except StopIteration as done:
+            return done.value
 
 
 @dataclass(frozen=True, eq=False)
@@ -189,6 +226,7 @@ class Clearance:
         depth = anc @ lengths  # each link's end, along its path from the base
         self._link_lever = np.where(anc, depth[:, None] - depth[None, :] + lengths[None, :], 0.0)
         self._lever = self._link_lever.max(axis=0)
+        self._pose_units = POSE_UNITS * skeleton.count * len(obstacles)
 
     # -- distances ---------------------------------------------------------------------------
 
@@ -339,6 +377,17 @@ class Clearance:
         that mean distance. With ``avoid`` False the obstacles play no part (plain damped least
         squares).
         """
+        return _finish(self._polishing(angles, target, iterations, tolerance, avoid))
+
+    def _polishing(
+        self,
+        angles: np.ndarray,
+        target: np.ndarray | TargetSet,
+        iterations: int,
+        tolerance: float,
+        avoid: bool,
+    ) -> _Work[Solution]:
+        """:meth:`polish`, an iteration (``ITERATION_UNITS`` of work) a step."""
         sk = self.skeleton
         pose = sk.clamp(np.asarray(angles, dtype=float).copy())
         links, points, scale = self._aim(target)
@@ -357,6 +406,8 @@ class Clearance:
                 gap, point, unit = self._pairs(pts)
             else:
                 gap = np.full((n, 0), math.inf)
+            # Counted here, before the iteration can end the polish, so every iteration counts.
+            yield ITERATION_UNITS
             misses = np.hypot(off[:, 0], off[:, 1])
             if len(links) == 1:
                 dist = float(misses[0])
@@ -431,29 +482,40 @@ class Clearance:
         it (as long, obstacles ignored) brings no end more than ``tolerance`` nearer its
         target.
         """
+        found = _finish(self._answering(measured, answer, target, tolerance))
+        return None if found is None else found[0]
+
+    def _answering(
+        self,
+        measured: np.ndarray,
+        answer: np.ndarray,
+        target: np.ndarray | TargetSet,
+        tolerance: float,
+    ) -> _Work[tuple[np.ndarray, bool] | None]:
+        """:meth:`clear_answer` in steps of work (see :class:`Avoider`), with whether the
+        straight line to it from ``measured`` was checked clear."""
+        measured = np.asarray(measured, float)
         found: list[np.ndarray] = []
         short: list[Solution] = []
-        for start in self.seeds(np.asarray(measured, float), np.asarray(answer, float)):
-            sol = self.polish(start, target, tolerance=tolerance)
+        for start in self.seeds(measured, np.asarray(answer, float)):
+            sol = yield from self._polishing(start, target, POLISH_ITERATIONS, tolerance, True)
             if sol.status is not SolveStatus.SUCCESS:
                 if isinstance(target, TargetSet) and self.is_clear(sol.angles):
                     short.append(sol)
                 continue
-            if self.path_clear(measured, sol.angles):
-                return sol.angles
+            if (yield from self._checking(measured, sol.angles)):
+                return sol.angles, True
             found.append(sol.angles)
         if not found and short:
             start = min(short, key=lambda sol: sol.error).angles
             # Both polished to the end, so that they differ only where an obstacle is in the way.
-            nearest = self.polish(start, target, iterations=FREE_ITERATIONS).angles
-            free = self.polish(
-                nearest, target, iterations=FREE_ITERATIONS, tolerance=tolerance, avoid=False
-            )
+            nearest = (yield from self._polishing(start, target, FREE_ITERATIONS, 0.5, True)).angles
+            free = yield from self._polishing(nearest, target, FREE_ITERATIONS, tolerance, False)
             gained = self.misses(nearest, target) - self.misses(free.angles, target)
-            return nearest if bool(np.all(gained <= tolerance)) else None
+            return (nearest, False) if bool(np.all(gained <= tolerance)) else None
         if not found:
             return None
-        return min(found, key=lambda pose: float(np.abs(pose - measured).sum()))
+        return min(found, key=lambda pose: float(np.abs(pose - measured).sum())), False
 
     # -- paths -------------------------------------------------------------------------------
 
@@ -474,9 +536,25 @@ class Clearance:
         """Whether the straight joint-space line from ``a`` to ``b`` keeps every link half the
         margin clear (the motors do not follow the line exactly, and a link rubbing along an
         obstacle drags). A start already closer than that may only get farther."""
+        return _finish(self._checking(a, b))
+
+    def _checking(self, a: np.ndarray, b: np.ndarray) -> _Work[bool]:
+        """:meth:`path_clear`, ``PATH_CHUNK`` poses a step, stopping at the first chunk that
+        comes too close."""
         if not len(self.obstacles):
             return True
-        return _clear_along(self.path_gaps(a, b), self.margin / 2.0)
+        poses = self._samples(np.asarray(a, float), np.asarray(b, float))
+        bar = 0.0
+        for first in range(0, len(poses), PATH_CHUNK):
+            gaps = self.smallest_gaps(poses[first : first + PATH_CHUNK])
+            yield CHECK_UNITS + len(gaps) * self._pose_units
+            if first == 0:
+                # As _clear_along: a start already closer than the floor may only get farther.
+                bar = min(self.margin / 2.0, float(gaps[0]) - 1e-9)
+                gaps = gaps[1:]
+            if not np.all(gaps >= bar):
+                return False
+        return True
 
     def route(self, start: np.ndarray, goal: np.ndarray) -> list[np.ndarray] | None:
         """Via poses from ``start`` to the clear ``goal`` (the goal last), each reached from the
@@ -492,11 +570,15 @@ class Clearance:
         >>> all(room.path_clear(a, b) for a, b in zip([start, *way], way))
         True
         """
+        return _finish(self._routing(start, goal))
+
+    def _routing(self, start: np.ndarray, goal: np.ndarray) -> _Work[list[np.ndarray] | None]:
+        """:meth:`route` in steps of work (see :class:`Avoider`)."""
         start = np.asarray(start, float)
         goal = np.asarray(goal, float)
-        if self.path_clear(start, goal):
+        if (yield from self._checking(start, goal)):
             return [goal]
-        found = self._connect(start, goal)
+        found = yield from self._connect(start, goal)
         if found is None:
             return None
         # Greedy shortcuts: from each pose, the farthest one reachable in a clear straight line.
@@ -504,13 +586,13 @@ class Clearance:
         here, index = start, 0
         while index < len(found):
             far = len(found) - 1
-            while far > index and not self.path_clear(here, found[far]):
+            while far > index and not (yield from self._checking(here, found[far])):
                 far -= 1
             here, index = found[far], far + 1
             way.append(here)
         return way
 
-    def _connect(self, start: np.ndarray, goal: np.ndarray) -> list[np.ndarray] | None:
+    def _connect(self, start: np.ndarray, goal: np.ndarray) -> _Work[list[np.ndarray] | None]:
         """RRT-connect in joint space: the poses from ``start`` (excluded) to ``goal``."""
         sk = self.skeleton
         rng = np.random.default_rng(RANDOM_SEED)
@@ -521,9 +603,9 @@ class Clearance:
         for _ in range(ROUTE_NODES):
             grow, other = trees
             sample = rng.uniform(low, high)
-            new, _ = self._extend(grow, sample, reach=True)
+            new, _ = yield from self._extend(grow, sample, reach=True)
             if new is not None:
-                reached, arrived = self._extend(other, grow[0][new], reach=True)
+                reached, arrived = yield from self._extend(other, grow[0][new], reach=True)
                 if arrived:
                     a = _lineage(grow, new)
                     b = _lineage(other, reached)
@@ -534,7 +616,7 @@ class Clearance:
 
     def _extend(
         self, tree: tuple[list[np.ndarray], list[int]], toward: np.ndarray, *, reach: bool = False
-    ) -> tuple[int | None, bool]:
+    ) -> _Work[tuple[int | None, bool]]:
         """Grow ``tree`` from its nearest node toward a pose, ``ROUTE_STEP`` at a time (once,
         or with ``reach`` until it gets there or is blocked): the index of the last node added
         (None if none) and whether it is the pose itself."""
@@ -547,7 +629,7 @@ class Clearance:
             largest = float(np.abs(gap).max())
             arrived = largest <= ROUTE_STEP
             nxt = toward if arrived else here + gap * (ROUTE_STEP / largest)
-            if not self.path_clear(here, nxt):
+            if not (yield from self._checking(here, nxt)):
                 return added, False
             nodes.append(nxt)
             parents.append(near)
@@ -572,32 +654,76 @@ class Avoider:
     off the planned line, whose straight way on to its via pose is blocked from where it is, gets a
     new route from there.
 
+    The search is spread over calls: each does at most ``budget`` units of its work
+    (``ITERATION_UNITS`` per polish iteration, ``CHECK_UNITS`` per step of a path check and
+    ``POSE_UNITS`` per pose checked, link and obstacle; a count, not a clock, so runs repeat
+    exactly) and then stops until the next call, in the same order as all at once, so
+    it finds what one call would have found, some calls later. While it runs (see
+    :attr:`planning`), with status ``PROCESSING``, the chain heads for the solver's answer if
+    that is still on its way (``PROCESSING``) and it and the straight way to it are clear; else
+    it goes on along the plan it has for an earlier target, if any; else it holds the pose it
+    was last sent to, which it was heading for along a way checked clear (else the pose it was
+    in when the search began, where the route will start). A search goes on when the target moves meanwhile (a target that moves
+    every tick would otherwise never get one): its plan is followed while one for the new target
+    is searched for, and the chain is routed again from where it is when the first piece of a
+    finished plan is not clear from there. It is dropped when the solver's answer needs none.
+
     >>> arm = Skeleton.chain([100.0, 100.0], base_angle=math.pi / 2)
     >>> shelf = Obstacles.from_arrays(np.array([[-50.0, 150.0, 50.0, 150.0, 0.0]]), np.empty((0, 3)))
-    >>> guide = Avoider(Clearance(arm, np.full(2, 5.0), shelf))
+    >>> guide = Avoider(Clearance(arm, np.full(2, 5.0), shelf), budget=ITERATION_UNITS)
     >>> through = Solution(np.zeros(2), SolveStatus.SUCCESS, 1, 0.0)  # straight up, through it
-    >>> steered = guide.steer(np.array([-1.0, 0.0]), through, np.array([0.0, 200.0]), 160.0)
+    >>> at = np.array([-1.0, 0.0])
+    >>> steered = guide.steer(at, through, np.array([0.0, 200.0]), 160.0)
+    >>> guide.planning, steered.status.name, steered.angles.tolist()  # holds while it searches
+    (True, 'PROCESSING', [-1.0, 0.0])
+    >>> while guide.planning:
+    ...     steered = guide.steer(at, through, np.array([0.0, 200.0]), 160.0)
     >>> guide.clearance.is_clear(steered.angles)
     True
     """
 
-    def __init__(self, clearance: Clearance, *, replan: bool = False) -> None:
+    def __init__(
+        self, clearance: Clearance, *, replan: bool = False, budget: float = SEARCH_BUDGET
+    ) -> None:
+        if not budget > 0:
+            raise ValueError(f"budget must be a positive number of work units, got {budget!r}")
+        # numpy loads its random module on first use (several ms): load it with the avoider,
+        # not in the tick of its first search.
+        import numpy.random  # noqa: F401
+
         self.clearance = clearance
         self.replan = replan
         """Whether to route again from where the chain is when the way on is blocked."""
+        self.budget = budget
+        """Units of search work one call does at most before its last step (``math.inf``: the
+        whole search in one call)."""
         self._skeleton = clearance.skeleton
         self.reset()
 
     def reset(self) -> None:
-        """Forget the clear answer and route (say, after the chain was found blocked)."""
+        """Forget the clear answer, the route, any search and the pose last commanded (say,
+        after the chain was found blocked)."""
+        self._forget()
+        self._commanded: np.ndarray | None = None
+        self._unchecked = False
+
+    def _forget(self) -> None:
+        """Forget the clear answer, the route and any search."""
         self._target: tuple[float, ...] | None = None
         self._goal: np.ndarray | None = None
         self._way: list[np.ndarray] = []
         self._given_up: tuple[float, ...] | None = None
         self._tolerance: float | np.ndarray = 0.0
         self._resting = 0
+        self._rest_misses = np.zeros(0)
         self._line: tuple[np.ndarray, np.ndarray, float] | None = None
         self._checked: tuple[np.ndarray, np.ndarray] | None = None
+        self._search: _Search | None = None
+
+    @property
+    def planning(self) -> bool:
+        """True while a search is spread over calls (the chain waits, see the class)."""
+        return self._search is not None
 
     def steer(
         self,
@@ -609,61 +735,166 @@ class Avoider:
         """The solution to command this tick (see the class): ``target`` is a chain's point or
         a tree's :class:`~ikgame.kinematics.targets.TargetSet` (kept until any of its points
         moves)."""
+        self._unchecked = False
+        steered = self._steer(measured, solution, target, tolerance)
+        # The solver's answer handed on unchecked is no pose to wait at.
+        self._commanded = None if self._unchecked else steered.angles
+        return steered
+
+    def _steer(
+        self,
+        measured: np.ndarray,
+        solution: Solution,
+        target: np.ndarray | TargetSet,
+        tolerance: float,
+    ) -> Solution:
+        """:meth:`steer`, but for noting the pose commanded."""
         room = self.clearance
         if room.skeleton is not self._skeleton:
             # The base moved: a plan made for it is stale, and one made now would be stale by the
             # next tick, so the solver answers until the base stands still again.
             self._skeleton = room.skeleton
             self.reset()
+            self._unchecked = True
             return solution
         key = _key(target)
-        if key != self._target:
-            self._target, self._goal, self._way = None, None, []
         if key == self._given_up:
+            self._unchecked = True
             return solution
-        if self._goal is not None:
+        search = self._search
+        if search is None and self._goal is not None and key == self._target:
             if not self._arrived(measured, target):
                 if not self.replan or self._clear_way(measured, self._way[0]):
                     return self._follow(measured, solution)
                 # The motors left the planned line (joints at their speed or torque limits at
                 # different times) and the way on from here is blocked: plan again from here.
-                way = room.route(measured, self._goal)
-                if way is None:
-                    self._given_up = key
-                    return solution
-                self._way = way
-                return self._follow(measured, solution)
-            self.reset()
-        if self._far_enough(measured, solution.angles):
-            return solution
-        reaches = solution.status is not SolveStatus.PROCESSING
-        goal = None
-        if reaches and room.is_clear(solution.angles):
-            if self._clear_way(measured, solution.angles):
+                work = self._rerouting(measured, self._goal, self._tolerance)
+                search = self._begin(key, measured, work, reroute=True)
+                return self._advance(search, measured, solution)
+            self._forget()
+        if search is None or not (search.reroute and search.key == key):
+            if self._far_enough(measured, solution.angles):
+                self._drop()
                 return solution
-            goal = solution.angles
+            reaches = solution.status is not SolveStatus.PROCESSING
+            goal = None
+            if reaches and room.is_clear(solution.angles):
+                if self._clear_way(measured, solution.angles):
+                    self._drop()
+                    return solution
+                goal = solution.angles
+            if search is None:
+                # An answer still on its way (PROCESSING) is no goal to route to: a clear one
+                # that arrives is searched for instead.
+                work = self._planning(measured, solution.angles, target, tolerance, goal)
+                search = self._begin(key, measured, work, reroute=False)
+        return self._advance(search, measured, solution)
+
+    def _begin(
+        self,
+        key: tuple[float, ...],
+        measured: np.ndarray,
+        work: _Work[_Plan | None],
+        *,
+        reroute: bool,
+    ) -> _Search:
+        """Start a search from ``measured`` for the target of ``key`` (with ``reroute``, a new
+        route for the current plan): the chain waits at the pose last commanded, which it was
+        heading for along a way checked clear, if there is one (not the solver's answer handed
+        on unchecked), else where it is (for a new route always: the way on from here is what
+        was blocked)."""
+        start = np.array(measured, dtype=float)
+        last = self._commanded
+        hold = start if reroute or last is None else last
+        self._search = _Search(key, work, start, hold, reroute)
+        return self._search
+
+    def _planning(
+        self,
+        start: np.ndarray,
+        answer: np.ndarray,
+        target: np.ndarray | TargetSet,
+        tolerance: float,
+        goal: np.ndarray | None,
+    ) -> _Work[_Plan | None]:
+        """The search for a target: a route to ``goal``, or to a clear answer when it is None."""
+        room = self.clearance
+        start = np.array(start, dtype=float)
+        arrival: float | np.ndarray = tolerance
         if goal is None:
-            # An answer still on its way (PROCESSING) is no goal to route to: a clear one that
-            # arrives is searched for instead.
-            goal = room.clear_answer(measured, solution.angles, target, tolerance)
-            if goal is not None:
-                # Ends a clear answer leaves short of targets out of reach arrive within
-                # ``tolerance`` of where it leaves them.
-                misses = room.misses(goal, target)
-                tolerance = np.where(misses > tolerance, misses + tolerance, tolerance)
-        way = None if goal is None else room.route(measured, goal)
-        if way is None:
+            found = yield from room._answering(start, answer, target, tolerance)
+            if found is None:
+                return None
+            goal, straight = found
+            # Ends a clear answer leaves short of targets out of reach arrive within
+            # ``tolerance`` of where it leaves them.
+            misses = room.misses(goal, target)
+            arrival = np.where(misses > tolerance, misses + tolerance, tolerance)
+            if straight:
+                # The straight way to it was just checked clear: the route is that line.
+                return goal, [goal], arrival
+        return (yield from self._rerouting(start, goal, arrival))
+
+    def _rerouting(
+        self, start: np.ndarray, goal: np.ndarray, tolerance: float | np.ndarray
+    ) -> _Work[_Plan | None]:
+        """The search for a route from ``start`` to ``goal``: the plan, or None."""
+        way = yield from self.clearance._routing(np.array(start, dtype=float), goal)
+        return None if way is None else (goal, way, tolerance)
+
+    def _advance(self, search: _Search, measured: np.ndarray, solution: Solution) -> Solution:
+        """Do this call's share of the search; once it is done, take up its plan."""
+        spent = 0.0
+        try:
+            while spent < self.budget:
+                spent += next(search.work)
+        except StopIteration as done:
+            plan = done.value
+        else:
+            return self._wait(search, measured, solution)
+        self._search = None
+        if plan is None:
             # Searched once for this target: the solver's own answer it is, until it moves.
-            self._given_up = key
+            self._drop()
+            self._given_up = search.key
+            self._unchecked = True
             return solution
-        self._target, self._goal, self._way, self._tolerance = key, goal, way, tolerance
+        self._target, (self._goal, self._way, self._tolerance) = search.key, plan
+        moved = not np.array_equal(measured, search.start)
+        if moved and not self._clear_way(measured, self._way[0]):
+            # The chain went on (along an earlier plan, or drifting while it held) and the
+            # first piece is not clear from where it is now: route again from here.
+            work = self._rerouting(measured, self._goal, self._tolerance)
+            return self._wait(
+                self._begin(search.key, measured, work, reroute=True), measured, solution
+            )
         return self._follow(measured, solution)
+
+    def _wait(self, search: _Search, measured: np.ndarray, solution: Solution) -> Solution:
+        """What to command while ``search`` runs: the solver's answer still on its way, when it
+        and the straight way to it are clear (a pose on the way to the target, if no goal); else
+        on along an earlier target's plan; else hold (see :meth:`_begin`)."""
+        pose = search.hold
+        if not search.reroute:
+            answer = solution.angles
+            on_its_way = solution.status is SolveStatus.PROCESSING
+            if on_its_way and self.clearance.is_clear(answer) and self._clear_way(measured, answer):
+                pose = answer
+            elif self._way:
+                pose = self._follow(measured, solution).angles
+        return Solution(pose, SolveStatus.PROCESSING, solution.iterations, solution.error)
+
+    def _drop(self) -> None:
+        """Forget the plan and any search: the solver's answer is commanded as it is."""
+        self._target, self._goal, self._way, self._search = None, None, [], None
 
     def _arrived(self, measured: np.ndarray, target: np.ndarray | TargetSet) -> bool:
         """Whether the solver may answer again: the chain has rested on the clear goal (within
-        ``SETTLED`` of it on every joint) for ``RELEASE_CALLS`` calls with a targeted end
-        still farther than the goal's tolerance from its target (sagging short, say), where re-solving
-        from the measured pose brings it the last pixels.
+        ``SETTLED`` of it on every joint, no targeted end coming more than the goal's tolerance
+        nearer its target or farther from it) for ``RELEASE_CALLS`` calls with a targeted end
+        still farther than the tolerance from its target (sagging short, say), where re-solving
+        from the measured pose brings it the last pixels. A long chain within ``SETTLED`` on
+        every joint can still be far from its goal, still closing in, and is not at rest.
 
         A chain resting on the goal with its end effector on the target keeps the goal until
         the target moves: the solver's own answer (CCD's from a pose a few px short, or one it
@@ -672,10 +903,13 @@ class Avoider:
         if np.abs(measured - self._goal).max() > SETTLED:
             self._resting = 0
             return False
+        misses = self.clearance.misses(measured, target)
+        if self._resting == 0 or np.any(np.abs(misses - self._rest_misses) > self._tolerance):
+            self._resting, self._rest_misses = 0, misses
         self._resting += 1
         if self._resting < RELEASE_CALLS:
             return False
-        return bool(np.any(self.clearance.misses(measured, target) > self._tolerance))
+        return bool(np.any(misses > self._tolerance))
 
     def _clear_way(self, measured: np.ndarray, pose: np.ndarray) -> bool:
         """Whether the straight line from ``measured`` to ``pose`` is clear.
@@ -736,6 +970,24 @@ class Avoider:
                 break
         status = SolveStatus.PROCESSING if len(way) > 1 else solution.status
         return Solution(way[0], status, solution.iterations, solution.error)
+
+
+_Plan = tuple[np.ndarray, list[np.ndarray], float | np.ndarray]
+"""A found plan: the clear goal, the via poses to it (the goal last) and the tolerance to arrive
+within."""
+
+
+@dataclass(eq=False)
+class _Search:
+    """A search spread over an :class:`Avoider`'s calls: the target it is for (its key), its
+    work, the pose it starts from, the pose to hold meanwhile and whether it routes the current
+    plan again."""
+
+    key: tuple[float, ...]
+    work: _Work[_Plan | None]
+    start: np.ndarray
+    hold: np.ndarray
+    reroute: bool
 
 
 def _key(target: np.ndarray | TargetSet) -> tuple[float, ...]:

@@ -4,7 +4,13 @@ import numpy as np
 import pytest
 
 from ikgame.kinematics import Skeleton, Solution, SolveStatus, TargetSet, forward_kinematics
-from ikgame.kinematics.clearance import Avoider, Clearance, Obstacles
+from ikgame.kinematics.clearance import (
+    ITERATION_UNITS,
+    SEARCH_BUDGET,
+    Avoider,
+    Clearance,
+    Obstacles,
+)
 
 UP = math.pi / 2
 NO_CIRCLES = np.empty((0, 3))
@@ -347,10 +353,136 @@ def test_with_replan_a_chain_carried_off_its_route_gets_a_new_one_from_where_it_
     guide = Avoider(room, replan=replan)
     target = np.array([290.0, 45.0])
     through = Solution(np.array([-0.3, -1.2, -0.6]), SolveStatus.SUCCESS, 10, 0.0)
-    guide.steer(np.array([0.5, 0.3, 0.2]), through, target, 0.5)
+    while guide.steer(np.array([0.5, 0.3, 0.2]), through, target, 0.5) and guide.planning:
+        pass
     # Carried off the line, bent under the shelf's left end: straight on to the via pose the
     # arm would sweep through the shelf.
     off = np.array([-0.1, -2.03, 0.23])
     assert room.is_clear(off)
     command = guide.steer(off, through, target, 0.5)
+    while guide.planning:  # a new route is searched for while the chain holds where it is
+        assert np.array_equal(command.angles, off)
+        command = guide.steer(off, through, target, 0.5)
     assert room.path_clear(off, command.angles) is replan
+
+
+def _settle(guide: Avoider, measured: np.ndarray, answer: Solution, target: np.ndarray) -> list:
+    """Every command while the avoider searches, the chain not moving, then the first after."""
+    commands = [guide.steer(measured, answer, target, 0.5)]
+    while guide.planning:
+        commands.append(guide.steer(measured, answer, target, 0.5))
+    return commands
+
+
+def test_one_steer_call_searches_no_more_than_its_budget(monkeypatch):
+    room = _shelf_room()
+    guide = Avoider(room)
+    iterations = []
+    polish_once = room._pairs
+    monkeypatch.setattr(room, "_pairs", lambda pts: iterations.append(1) or polish_once(pts))
+    through = Solution(np.array([-0.3, -1.2, -0.6]), SolveStatus.SUCCESS, 10, 0.0)
+    measured = np.array([0.5, 0.3, 0.2])
+    calls = []
+    for _ in range(400):
+        iterations.clear()
+        guide.steer(measured, through, np.array([290.0, 45.0]), 0.5)
+        calls.append(len(iterations))
+        if not guide.planning:
+            break
+    # The whole search polishes hundreds of times; a call stops once the budget is spent.
+    assert sum(calls) > 5 * SEARCH_BUDGET / ITERATION_UNITS
+    assert max(calls) <= SEARCH_BUDGET // ITERATION_UNITS + 1
+    assert not guide.planning
+
+
+def test_a_search_spread_over_calls_finds_what_one_call_finds():
+    for room, start, answer, target in (
+        (_shelf_room(), np.array([0.5, 0.3, 0.2]), np.array([-0.3, -1.2, -0.6]), [290.0, 45.0]),
+        (_two_arms_room(), RAISED, HEADING, HANDS_LOW_AND_HIGH),
+    ):
+        aim = target if isinstance(target, TargetSet) else np.array(target)
+        status = SolveStatus.PROCESSING if isinstance(target, TargetSet) else SolveStatus.SUCCESS
+        solution = Solution(answer, status, 10, 0.0)
+        at_once = Avoider(room, budget=math.inf)
+        spread = Avoider(room, budget=ITERATION_UNITS)
+        assert len(_settle(at_once, start, solution, aim)) == 1
+        commands = _settle(spread, start, solution, aim)
+        assert len(commands) > 10
+        assert np.array_equal(commands[-1].angles, at_once.steer(start, solution, aim, 0.5).angles)
+        # The chain follows the same plan after it.
+        assert np.array_equal(
+            _move_as_told(spread, start, solution, aim, 300),
+            _move_as_told(at_once, start, solution, aim, 300),
+        )
+
+
+def test_while_it_searches_the_chain_holds_the_pose_it_started_from():
+    room = _shelf_room()
+    guide = Avoider(room, budget=ITERATION_UNITS)
+    through = Solution(np.array([-0.3, -1.2, -0.6]), SolveStatus.SUCCESS, 10, 0.0)
+    start = np.array([0.5, 0.3, 0.2])
+    first = guide.steer(start, through, np.array([290.0, 45.0]), 0.5)
+    assert guide.planning
+    assert first.status is SolveStatus.PROCESSING and np.array_equal(first.angles, start)
+    # Drifting a little while it waits, it is brought back where the route will start.
+    drifted = guide.steer(start + 0.01, through, np.array([290.0, 45.0]), 0.5)
+    assert guide.planning and np.array_equal(drifted.angles, start)
+    # Once the solver's own answer is clear and clear to turn to, the search is dropped.
+    clear = Solution(np.array([0.45, 0.3, 0.2]), SolveStatus.SUCCESS, 3, 0.0)
+    assert guide.steer(start, clear, np.array([-50.0, 350.0]), 0.5) is clear
+    assert not guide.planning
+
+
+def test_a_target_that_moves_every_call_still_gets_a_plan_and_is_followed():
+    room = _shelf_room()
+    guide = Avoider(room)
+    through = Solution(np.array([-0.3, -1.2, -0.6]), SolveStatus.SUCCESS, 10, 0.0)
+    measured = np.array([0.5, 0.3, 0.2])
+    start = measured
+    for tick in range(300):
+        # Creeping along under the shelf, a new target every call: searched afresh every call,
+        # a search that takes many calls would never end.
+        target = np.array([290.0 - 0.02 * tick, 45.0])
+        command = guide.steer(measured, through, target, 0.5)
+        assert room.path_clear(measured, command.angles)
+        step = command.angles - measured
+        measured = measured + step * min(1.0, 0.05 / max(np.abs(step).max(), 1e-12))
+    assert not np.array_equal(measured, start)
+    assert room.is_clear(measured)
+    assert np.hypot(*(room.points(measured)[-1] - target)) <= 5.0
+
+
+def test_the_budget_is_a_positive_amount_of_work():
+    with pytest.raises(ValueError, match="budget"):
+        Avoider(_shelf_room(), budget=0)
+
+
+def test_while_it_searches_the_chain_keeps_to_the_clear_pose_it_was_last_sent_to():
+    room = _shelf_room()
+    guide = Avoider(room, budget=ITERATION_UNITS)
+    measured = np.array([0.5, 0.3, 0.2])
+    heading = Solution(np.array([0.4, 0.3, 0.2]), SolveStatus.SUCCESS, 3, 0.0)
+    assert guide.steer(measured, heading, np.array([-50.0, 350.0]), 0.5) is heading
+    through = Solution(np.array([-0.3, -1.2, -0.6]), SolveStatus.SUCCESS, 10, 0.0)
+    waiting = guide.steer(measured + 0.02, through, np.array([290.0, 45.0]), 0.5)
+    assert guide.planning and waiting.status is SolveStatus.PROCESSING
+    assert np.array_equal(waiting.angles, heading.angles)
+
+
+def test_while_it_searches_the_chain_heads_for_an_answer_on_its_way_that_is_clear_to_turn_to():
+    room = _shelf_room()
+    guide = Avoider(room, budget=ITERATION_UNITS)
+    start = np.array([0.5, 0.3, 0.2])
+    through = Solution(np.array([-0.3, -1.2, -0.6]), SolveStatus.SUCCESS, 10, 0.0)
+    guide.steer(start, through, np.array([290.0, 45.0]), 0.5)
+    assert guide.planning
+    # Carried under the shelf meanwhile, the solver still on its way to a clear pose below it.
+    under = np.array([-0.503, -1.265, -0.115])
+    on_its_way = Solution(under + [0.0, -0.2, 0.0], SolveStatus.PROCESSING, 10, 30.0)
+    assert room.is_clear(on_its_way.angles) and room.path_clear(under, on_its_way.angles)
+    command = guide.steer(under, on_its_way, np.array([290.0, 45.0]), 0.5)
+    assert guide.planning and command.status is SolveStatus.PROCESSING
+    assert np.array_equal(command.angles, on_its_way.angles)
+    # An answer on its way through the shelf is not: the chain holds meanwhile.
+    blocked = Solution(through.angles, SolveStatus.PROCESSING, 10, 30.0)
+    assert np.array_equal(guide.steer(start, blocked, np.array([290.0, 45.0]), 0.5).angles, start)
