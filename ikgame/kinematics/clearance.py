@@ -657,16 +657,17 @@ class Avoider:
     The search is spread over calls: each does at most ``budget`` units of its work
     (``ITERATION_UNITS`` per polish iteration, ``CHECK_UNITS`` per step of a path check and
     ``POSE_UNITS`` per pose checked, link and obstacle; a count, not a clock, so runs repeat
-    exactly) and then stops until the next call, in the same order as all at once, so
-    it finds what one call would have found, some calls later. While it runs (see
-    :attr:`planning`), with status ``PROCESSING``, the chain heads for the solver's answer if
-    that is still on its way (``PROCESSING``) and it and the straight way to it are clear; else
-    it goes on along the plan it has for an earlier target, if any; else it holds the pose it
-    was last sent to, which it was heading for along a way checked clear (else the pose it was
-    in when the search began, where the route will start). A search goes on when the target moves meanwhile (a target that moves
-    every tick would otherwise never get one): its plan is followed while one for the new target
-    is searched for, and the chain is routed again from where it is when the first piece of a
-    finished plan is not clear from there. It is dropped when the solver's answer needs none.
+    exactly) and then stops until the next call, in the same order as all at once, so it finds
+    what one call would have found, some calls later. While it runs (see :attr:`planning`), with
+    status ``PROCESSING``, the chain heads for the solver's answer if that is still on its way
+    (``PROCESSING``) and it and the straight way to it are clear; else it goes on along the plan
+    it has for an earlier target, if any; else it holds the pose it was last sent to, which it
+    was heading for along a way checked clear (else the pose it was in when the search began,
+    where the route will start). A search goes on when the target moves meanwhile (a target that
+    moves every tick would otherwise never get one): its plan is followed while one for the new
+    target is searched for, and the chain is routed again from where it is when the first piece
+    of a finished plan is not clear from there. It is dropped when the solver's answer needs
+    none.
 
     >>> arm = Skeleton.chain([100.0, 100.0], base_angle=math.pi / 2)
     >>> shelf = Obstacles.from_arrays(np.array([[-50.0, 150.0, 50.0, 150.0, 0.0]]), np.empty((0, 3)))
