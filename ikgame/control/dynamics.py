@@ -330,11 +330,12 @@ def plan_drive(
     When even coasting needs more torque than some joint has (a load beyond a weak motor, a
     knock from an obstacle), no factor is taken: a fraction of the other joints' accelerations
     could offload it for a tick, but they cannot keep accelerating, and propping a joint up that
-    way one tick and not the next lets it sag with torque to spare. The chain is then given the loads of coasting, the
-    overloaded joints' clipped to their limits, the accelerations stay the wanted ones for the
-    motors to strive for with what torque they have left, and the physics engine finds how the
-    chain gives way: its implicit constraint solver is stable where an explicit answer from here
-    (forward dynamics with clipped torques) flings the light links of a long chain about.
+    way one tick and not the next lets it sag with torque to spare. The chain is then given the
+    loads of coasting, the overloaded joints' clipped to their limits, the accelerations stay
+    the wanted ones for the motors to strive for with what torque they have left, and the
+    physics engine finds how the chain gives way: its implicit constraint solver is stable where
+    an explicit answer from here (forward dynamics with clipped torques) flings the light links
+    of a long chain about.
 
     >>> one = ChainInertia(np.array([10.0]), np.array([2.0]), np.array([50.0 / 3.0]))
     >>> drive = plan_drive(one, np.zeros(1), np.zeros(1), np.array([300.0]), (0.0, 0.0),
