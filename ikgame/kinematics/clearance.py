@@ -473,7 +473,10 @@ class Clearance:
         no seed found one.
 
         Among the seeds' polished poses, the first the skeleton can turn to in a straight clear
-        line wins; otherwise the clear one nearest ``measured`` in joint space.
+        line wins; otherwise the clear one nearest ``measured`` in joint space. When no seed of a
+        chain arrives, the clear one that came nearest is taken onto the target with the
+        obstacles ignored and polished off them again (a polish close by an obstacle can stall
+        a px short, the pull on the end balanced by the push off it).
 
         The points of a target set can lie out of joint reach (pulled apart, or one a little
         past an arm's reach) with the obstacles nowhere near: when no seed arrives, the clear
@@ -500,12 +503,26 @@ class Clearance:
         for start in self.seeds(measured, np.asarray(answer, float)):
             sol = yield from self._polishing(start, target, POLISH_ITERATIONS, tolerance, True)
             if sol.status is not SolveStatus.SUCCESS:
-                if isinstance(target, TargetSet) and self.is_clear(sol.angles):
+                if self.is_clear(sol.angles):
                     short.append(sol)
                 continue
             if (yield from self._checking(measured, sol.angles)):
                 return sol.angles, True
             found.append(sol.angles)
+        if not found and short and not isinstance(target, TargetSet):
+            # Close by an obstacle the polish can stall a px short, the pull on the end balanced
+            # by the push off the obstacle. From the nearest such pose the end is taken onto the
+            # target with the obstacles ignored, and the polish then only has to push off them.
+            start = min(short, key=lambda sol: sol.error).angles
+            free = yield from self._polishing(start, target, POLISH_ITERATIONS, tolerance, False)
+            if free.status is not SolveStatus.SUCCESS:
+                return None
+            sol = yield from self._polishing(
+                free.angles, target, POLISH_ITERATIONS, tolerance, True
+            )
+            if sol.status is not SolveStatus.SUCCESS:
+                return None
+            return sol.angles, (yield from self._checking(measured, sol.angles))
         if not found and short:
             start = min(short, key=lambda sol: sol.error).angles
             # Both polished to the end, so that they differ only where an obstacle is in the way.

@@ -486,3 +486,20 @@ def test_while_it_searches_the_chain_heads_for_an_answer_on_its_way_that_is_clea
     # An answer on its way through the shelf is not: the chain holds meanwhile.
     blocked = Solution(through.angles, SolveStatus.PROCESSING, 10, 30.0)
     assert np.array_equal(guide.steer(start, blocked, np.array([290.0, 45.0]), 0.5).angles, start)
+
+
+def test_a_target_just_above_the_floor_gets_a_clear_answer_though_polishes_stall_near_it():
+    # Three 90 px links, a floor 4 px thick 20 px below the base, a target far out 8 px above it.
+    # A clear pose reaches it (the last link nearly level), but polished toward it the end stalls
+    # a px short from every seed, the pull on it balanced by the push off the floor.
+    limits = [(-math.radians(150.0), math.radians(150.0))] * 3
+    arm = Skeleton.chain([90.0, 90.0, 90.0], base_angle=UP, limits=limits)
+    floor = Obstacles.from_arrays(np.array([[-2000.0, -20.0, 2000.0, -20.0, 4.0]]), NO_CIRCLES)
+    room = Clearance(arm, np.full(3, 6.0), floor)
+    target = np.array([227.6, -7.9])
+    # Where the chain rests after the target before, and the solver's first answer from there.
+    measured = np.array([0.1906533166386981, 0.5010200025199336, 1.9912164180919678])
+    answer = np.array([-1.0818936394657892, 2.6179938779914944, 2.6179938779914944])
+    pose = room.clear_answer(measured, answer, target, 0.5)
+    assert pose is not None and room.is_clear(pose)
+    assert np.hypot(*(forward_kinematics(arm, pose)[0][-1] - target)) <= 0.5
