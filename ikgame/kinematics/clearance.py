@@ -566,8 +566,7 @@ class Clearance:
             gaps = self.smallest_gaps(poses[first : first + PATH_CHUNK])
             yield CHECK_UNITS + len(gaps) * self._pose_units
             if first == 0:
-                # As _clear_along: a start already closer than the floor may only get farther.
-                bar = min(self.margin / 2.0, float(gaps[0]) - 1e-9)
+                bar = _least_gap(self.margin / 2.0, float(gaps[0]))
                 gaps = gaps[1:]
             if not np.all(gaps >= bar):
                 return False
@@ -1016,9 +1015,14 @@ def _key(target: np.ndarray | TargetSet) -> tuple[float, ...]:
 
 
 def _clear_along(gaps: np.ndarray, floor: float) -> bool:
-    """Whether a path with these gaps (start first) keeps ``floor`` px clear, or at least never
-    comes closer than its start already is."""
-    return bool(np.all(gaps[1:] >= min(floor, gaps[0] - 1e-9)))
+    """Whether a path with these gaps (start first) keeps the gap :func:`_least_gap` allows."""
+    return bool(np.all(gaps[1:] >= _least_gap(floor, float(gaps[0]))))
+
+
+def _least_gap(floor: float, start: float) -> float:
+    """The smallest gap (px) a path starting ``start`` px clear may come to: ``floor``, or no
+    closer than its start already is when that is closer still."""
+    return min(floor, start - 1e-9)
 
 
 def _distance_to(x: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
