@@ -74,13 +74,18 @@ class FloatChain:
 
     def joints(self, angles: list[float]) -> tuple[list[float], list[float]]:
         """World x and y of every joint, then the end effector, px."""
-        xs = [self.base_x]
-        ys = [self.base_y]
+        x, y = self.base_x, self.base_y
+        xs = [x]
+        ys = [y]
         heading = self.base_angle
+        cos, sin = math.cos, math.sin
+        # The running x and y stay in locals: this is the solvers' innermost loop.
         for length, angle in zip(self.lengths, angles, strict=True):
             heading += angle
-            xs.append(xs[-1] + length * math.cos(heading))
-            ys.append(ys[-1] + length * math.sin(heading))
+            x += length * cos(heading)
+            y += length * sin(heading)
+            xs.append(x)
+            ys.append(y)
         return xs, ys
 
     def error_sqr(self, angles: list[float], tx: float, ty: float) -> float:
