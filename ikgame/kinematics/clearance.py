@@ -57,6 +57,7 @@ __all__ = [
     "CHECK_UNITS",
     "ITERATION_UNITS",
     "POSE_UNITS",
+    "POLISH_REACH",
     "SEARCH_BUDGET",
     "Avoider",
     "Clearance",
@@ -119,6 +120,11 @@ POSE_UNITS: Final = 0.05
 
 PATH_CHUNK: Final = 100
 """Poses a path check measures in one step of a search."""
+
+POLISH_REACH: Final = 0.1
+"""Most a polish iteration aims a targeted end toward its target, as a share of the longest
+lever (px/px): a far target pulls the pose there in short steps that stay near the seed, not in
+one long damped step that flings a long chain into a coil."""
 
 _MAX_STEP: Final = 0.2
 _MAX_SAMPLES: Final = 400
@@ -397,6 +403,7 @@ class Clearance:
         best, best_key, stale = pose, (math.inf, math.inf), 0
         best_misses = np.full(len(links), math.inf)
         damping = (0.02 * float(self._lever.max())) ** 2
+        reach = POLISH_REACH * float(self._lever.max())
         for _ in range(iterations):
             pts = self.points(pose)
             starts, ends = self._links(pts)
@@ -425,7 +432,8 @@ class Clearance:
                 break
             aims = columns(reached, starts, moves[links]) * scale[:, None, None]
             rows = [aims.reshape(-1, n)]
-            wanted = [(off * scale[:, None]).reshape(-1)]
+            pull = off * np.minimum(1.0, reach / np.maximum(misses, 1e-12))[:, None]
+            wanted = [(pull * scale[:, None]).reshape(-1)]
             near, obstacles = np.nonzero(gap < self.margin + ACTIVE)
             if near.size:
                 p = point[near, obstacles]

@@ -176,6 +176,20 @@ def test_polish_turns_an_answer_through_the_shelf_into_a_clear_one_that_arrives(
     assert np.all(sol.angles >= room.skeleton.lower) and np.all(sol.angles <= room.skeleton.upper)
 
 
+@pytest.mark.parametrize("target", [(149.1, 16.2), (-150.0, 100.0), (175.7, 143.5)])
+def test_a_long_chain_polished_toward_a_far_target_gets_there_in_short_steps(target):
+    # One long damped step toward a far target flings sixty light links into the floor, the
+    # polish never improves on its start and gives up where it began, 300 px short.
+    arm = Skeleton.chain([6.0] * 60, base_angle=UP, limits=[(-1.745, 1.745)] * 60)
+    floor = Obstacles.from_arrays(np.array([[-2000.0, -20.0, 2000.0, -20.0, 0.0]]), NO_CIRCLES)
+    room = Clearance(arm, np.full(60, 5.0), floor)
+    high = room.polish(np.zeros(60), np.array([45.9, 321.7])).angles
+    sol = room.polish(high, np.array(target))
+    assert sol.status is SolveStatus.SUCCESS
+    assert room.is_clear(sol.angles)
+    assert room.path_clear(high, sol.angles)
+
+
 def test_clear_answer_reaches_under_the_shelf_and_gives_up_inside_an_obstacle():
     room = _shelf_room()
     measured = np.array([0.5, 0.3, 0.2])  # up and to the left, clear
