@@ -15,7 +15,7 @@ width). A chain aims its end effector at a point; a tree aims a
   ``MARGIN`` (the rows of an inequality, active only near contact).
   :meth:`Clearance.clear_answer` polishes a set of seeds (the measured pose, the straight answer,
   the answer with its bends reversed, poses curled either way, ``RANDOM_SEEDS`` random poses
-  within the limits) and keeps the clear one that arrives nearest the measured pose, preferring
+  within the limits, the nearest the target of ``RANDOM_POOL`` drawn) and keeps the clear one that arrives nearest the measured pose, preferring
   one the chain can turn to in a straight line.
 - **a clear path** (:meth:`Clearance.route`): the motors turn every joint toward its goal
   together, so the chain moves close to the straight line in joint space. When that line sweeps
@@ -54,6 +54,7 @@ __all__ = [
     "PATH_STEP",
     "ROUTE_NODES",
     "RANDOM_SEEDS",
+    "RANDOM_POOL",
     "CHECK_UNITS",
     "ITERATION_UNITS",
     "POSE_UNITS",
@@ -79,6 +80,9 @@ ROUTE_NODES: Final = 1500
 
 RANDOM_SEEDS: Final = 12
 """Random poses (within the limits) polished after the deliberate seeds of a clear answer."""
+
+RANDOM_POOL: Final = 400
+"""Random poses drawn for a clear answer's ``RANDOM_SEEDS``, which are the nearest of them."""
 
 RANDOM_SEED: Final = 7193
 """Seed of the generators of random seeds and route samples: the same inputs give the same
@@ -454,10 +458,14 @@ class Clearance:
             status = SolveStatus.PROCESSING
         return Solution(best, status, iterations, best_key[1])
 
-    def seeds(self, measured: np.ndarray, answer: np.ndarray) -> list[np.ndarray]:
+    def seeds(
+        self, measured: np.ndarray, answer: np.ndarray, target: np.ndarray | TargetSet
+    ) -> list[np.ndarray]:
         """Starts for :meth:`clear_answer`: the measured pose, the answer, the answer with its
         bends reversed (every joint but the roots), the links curled evenly either way, then
-        random poses within the limits (seeded)."""
+        ``RANDOM_SEEDS`` random poses within the limits (seeded): of ``RANDOM_POOL`` drawn, the
+        clear ones whose targeted ends come nearest their targets (weighted), then the others
+        by the same measure."""
         sk = self.skeleton
         n = sk.count
         roots = sk.parents < 0
@@ -467,7 +475,15 @@ class Clearance:
         curl = math.pi / max(n, 2)
         starts = [measured, answer, reversed_bends, np.full(n, curl), np.full(n, -curl)]
         rng = np.random.default_rng(RANDOM_SEED)
-        starts.extend(rng.uniform(low, high, (RANDOM_SEEDS, n)))
+        pool = rng.uniform(low, high, (RANDOM_POOL, n))
+        links, points, scale = self._aim(target)
+        _, ends = self._links(self.points(pool))
+        off = points - ends[:, links]
+        misses = (scale**2 * (off**2).sum(axis=-1)).sum(axis=-1)
+        clear = self.smallest_gaps(pool) >= 0.0
+        # A pose drawn at random a long way off lands the polish in a fold it cannot leave (a
+        # link hooked round an obstacle's end); one already near reaching the target rarely does.
+        starts.extend(pool[np.lexsort((misses, ~clear))[:RANDOM_SEEDS]])
         return [sk.clamp(np.asarray(s, dtype=float)) for s in starts]
 
     def clear_answer(
@@ -508,7 +524,9 @@ class Clearance:
         measured = np.asarray(measured, float)
         found: list[np.ndarray] = []
         short: list[Solution] = []
-        for start in self.seeds(measured, np.asarray(answer, float)):
+        # Drawing and measuring the pool of random seeds, counted as that many poses checked.
+        yield POSE_UNITS * RANDOM_POOL * self.skeleton.count * len(self.obstacles)
+        for start in self.seeds(measured, np.asarray(answer, float), target):
             sol = yield from self._polishing(start, target, POLISH_ITERATIONS, tolerance, True)
             if sol.status is not SolveStatus.SUCCESS:
                 if self.is_clear(sol.angles):
@@ -842,22 +860,27 @@ class Avoider:
         tolerance: float,
         goal: np.ndarray | None,
     ) -> _Work[_Plan | None]:
-        """The search for a target: a route to ``goal``, or to a clear answer when it is None."""
+        """The search for a target: a route to ``goal``, else (or when it is None) to a clear
+        answer."""
         room = self.clearance
         start = np.array(start, dtype=float)
-        arrival: float | np.ndarray = tolerance
-        if goal is None:
-            found = yield from room._answering(start, answer, target, tolerance)
-            if found is None:
-                return None
-            goal, straight = found
-            # Ends a clear answer leaves short of targets out of reach arrive within
-            # ``tolerance`` of where it leaves them.
-            misses = room.misses(goal, target)
-            arrival = np.where(misses > tolerance, misses + tolerance, tolerance)
-            if straight:
-                # The straight way to it was just checked clear: the route is that line.
-                return goal, [goal], arrival
+        if goal is not None:
+            plan = yield from self._rerouting(start, goal, tolerance)
+            if plan is not None:
+                return plan
+            # The solver's clear answer can lie where no clear way leads (a fold the joint
+            # limits shut in behind an obstacle); an answer polished from the seeds may not.
+        found = yield from room._answering(start, answer, target, tolerance)
+        if found is None:
+            return None
+        goal, straight = found
+        # Ends a clear answer leaves short of targets out of reach arrive within ``tolerance``
+        # of where it leaves them.
+        misses = room.misses(goal, target)
+        arrival = np.where(misses > tolerance, misses + tolerance, tolerance)
+        if straight:
+            # The straight way to it was just checked clear: the route is that line.
+            return goal, [goal], arrival
         return (yield from self._rerouting(start, goal, arrival))
 
     def _rerouting(

@@ -190,6 +190,25 @@ def test_a_long_chain_polished_toward_a_far_target_gets_there_in_short_steps(tar
     assert room.path_clear(high, sol.angles)
 
 
+def test_clear_answer_beside_a_shelfs_end_comes_from_a_random_seed_near_the_target():
+    # Three 140 px links and a shelf to the left: from the arm's pose to the right, and from
+    # the solver's answer through the shelf, every deliberate seed's polish hooks a link round
+    # the shelf's end and stalls; so do random poses drawn anywhere, but not the ones nearest.
+    arm = Skeleton.chain([140.0] * 3, base_angle=UP, limits=[(-2.618, 2.618)] * 3)
+    obstacles = Obstacles.from_arrays(
+        np.array([[-600.0, -20.0, 500.0, -20.0, 0.0], [-480.0, 150.0, -150.0, 150.0, 6.0]]),
+        NO_CIRCLES,
+    )
+    room = Clearance(arm, np.full(3, 6.0), obstacles)
+    measured = np.radians([-0.1, 7.7, -88.7])
+    through = np.radians([104.5, -36.0, -144.6])
+    target = np.array([-130.0, 50.0])
+    found = room.clear_answer(measured, through, target, 0.5)
+    assert found is not None
+    assert room.is_clear(found)
+    assert room.misses(found, target)[0] <= 0.5
+
+
 def test_clear_answer_reaches_under_the_shelf_and_gives_up_inside_an_obstacle():
     room = _shelf_room()
     measured = np.array([0.5, 0.3, 0.2])  # up and to the left, clear
