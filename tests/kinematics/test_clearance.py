@@ -233,6 +233,36 @@ def test_route_goes_round_the_shelf_in_clear_straight_pieces():
         assert room.path_clear(a, b)
 
 
+def test_a_clear_answer_no_way_leads_to_is_traded_for_a_clear_answer_of_the_seeds(monkeypatch):
+    room = _shelf_room()
+    start = np.array([0.5, 0.3, 0.2])  # up-left
+    target = np.array([290.0, 45.0])
+    found = room.clear_answer(start, start, target, 0.5)
+    polished = [room.polish(seed, target) for seed in room.seeds(start, start, target)]
+    shut_in = next(
+        sol.angles
+        for sol in polished
+        if sol.status is SolveStatus.SUCCESS and np.abs(sol.angles - found).max() > 0.5
+    )
+    assert room.is_clear(shut_in) and not room.path_clear(start, shut_in)
+    connect = Clearance._connect
+
+    def no_way_to_it(self, a, b):
+        if np.array_equal(b, shut_in):  # as if the limits shut it in behind the shelf
+            yield ITERATION_UNITS
+            return None
+        return (yield from connect(self, a, b))
+
+    monkeypatch.setattr(Clearance, "_connect", no_way_to_it)
+    guide = Avoider(room, budget=math.inf)
+    solver = Solution(shut_in, SolveStatus.SUCCESS, 1, 0.0)
+    steered = guide.steer(start, solver, target, 0.5)
+    # Given up on, the target would get the solver's answer, through the shelf.
+    assert not guide.planning
+    assert not np.array_equal(steered.angles, shut_in)
+    assert room.path_clear(start, steered.angles)
+
+
 def test_route_is_none_when_the_limits_leave_no_way_round():
     arm = Skeleton.chain([100.0], base_angle=UP, limits=[(-1.0, 1.0)])
     post = Obstacles.from_arrays(NO_SEGMENTS, np.array([[0.0, 80.0, 10.0]]))
