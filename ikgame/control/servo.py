@@ -105,8 +105,8 @@ class Servo:
         # Per joint, as lists: the float path (most chains) reads and writes them every tick.
         self._stalled = [False] * count
         # At its torque limit toward its goal on the last tick. A joint at its limit the other
-        # way is being swung away from its goal by its own motor (its share of the other
-        # joints' motion), not held off by a load it cannot beat.
+        # way is being swung away from its goal by its own motor (its share of the whole
+        # chain's motion), not held off by a load it cannot beat.
         self._straining = [False] * count
         # Straining on the last tick or the one before: a joint that cannot hold its load can
         # alternate between its limit and just under it as the motor and the feed-forward take
