@@ -9,8 +9,9 @@ This servo instead:
    is the deceleration the joint's spare torque (its limit less what gravity takes) gives the
    inertia beyond it: a velocity it can still brake from in time;
 2. never asks a joint for a velocity change it cannot make in one tick (``a x dt``), and a
-   joint that is saturated yet carried away from its goal asks only to stop until the target
-   moves (anti-windup): it comes to rest where its torque runs out instead of swinging there;
+   joint at its torque limit toward its goal yet carried away from it asks only to stop until
+   the target moves (anti-windup): it comes to rest where its torque runs out instead of
+   swinging there;
 3. turns the wanted velocity change into feed-forward torques and pivot forces with the chain's
    dynamics (:func:`~ikgame.control.dynamics.plan_drive`), within the torque limits, so that the
    physics engine's motors only correct what the model missed. Without that, the constraint
@@ -103,10 +104,13 @@ class Servo:
         count = len(self.max_torque)
         # Per joint, as lists: the float path (most chains) reads and writes them every tick.
         self._stalled = [False] * count
-        self._saturated = [False] * count
-        # At its torque limit on the last tick or the one before: a joint that cannot hold its
-        # load can alternate between its limit and just under it as the motor and the
-        # feed-forward take turns, and is pushing all the same.
+        # At its torque limit toward its goal on the last tick. A joint at its limit the other
+        # way is being swung away from its goal by its own motor (its share of the whole
+        # chain's motion), not held off by a load it cannot beat.
+        self._straining = [False] * count
+        # Straining on the last tick or the one before: a joint that cannot hold its load can
+        # alternate between its limit and just under it as the motor and the feed-forward take
+        # turns, and is pushing all the same.
         self._pushing = [False] * count
         self._velocities = [0.0] * count
         self._carried = [0.0] * count
@@ -134,10 +138,15 @@ class Servo:
         moved, or the world changed (gravity), so the goal may be within reach now."""
         self._stalled = [False] * len(self._stalled)
 
-    def _remember(self, saturated: list[bool]) -> None:
-        """Keep this tick's saturated joints, and which were pushing (see ``_pushing``)."""
-        self._pushing = [now or last for now, last in zip(saturated, self._saturated, strict=True)]
-        self._saturated = saturated
+    def _remember(self, saturated: list[bool], torques: list[float], errors: list[float]) -> None:
+        """Keep this tick's joints at their torque limit toward their goal (the sign of their
+        angle ``errors``, radians), and which were pushing (see ``_pushing``)."""
+        toward = [
+            at_limit and torque * error > 0.0
+            for at_limit, torque, error in zip(saturated, torques, errors, strict=True)
+        ]
+        self._pushing = [now or last for now, last in zip(toward, self._straining, strict=True)]
+        self._straining = toward
 
     def command(
         self,
@@ -231,7 +240,7 @@ class Servo:
             # swing's own loads, clipped, would fight the pivots and fling a long chain apart.
             # Gravity and the wanted acceleration alone, and pymunk's pivots find the rest.
             drive = fit_drive(hold, push, wanted_acceleration, self.max_torque, head)
-        self._remember(drive.saturated.tolist())
+        self._remember(drive.saturated.tolist(), drive.loads.torques.tolist(), error.tolist())
         return ServoCommand(
             rates=velocities + drive.accelerations * dt,
             torques=drive.loads.torques,
@@ -343,8 +352,8 @@ class Servo:
         if not consistent:
             # See command: gravity and the wanted acceleration alone, pymunk's pivots the rest.
             reached, loads, saturated, _ = fit_floats(hold, push, accelerations, limits, head)
-        self._remember(saturated)
         torques = loads[0]
+        self._remember(saturated, torques, errors)
         return ServoCommand(
             rates=np.array([v + a * dt for v, a in zip(now, reached, strict=True)]),
             torques=np.array(torques),

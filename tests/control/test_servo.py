@@ -149,6 +149,31 @@ def test_the_float_servo_commands_what_the_numpy_servo_does(parents, sections):
         assert np.array_equal(fast.stalled, slow.stalled)
 
 
+@pytest.mark.parametrize("floats", [True, False], ids=["floats", "numpy"])
+@pytest.mark.parametrize("toward", [True, False], ids=["toward-goal", "away-from-goal"])
+def test_only_a_joint_at_its_limit_toward_its_goal_stalls(floats, toward):
+    # The outer joint's big move needs more torque at the base than it has: the base sits at
+    # its limit, the torque pointing the negative way, and drifts away from its goal faster and
+    # faster. With the goal on that side, the base pushes for it at its limit and cannot hold:
+    # it stalls. With the goal on the other side, its own motor carries it off: no stall.
+    # Counted as one, a joint of twenty links reaching low gave up its goal for good (FABRIK's
+    # chain ended blocked 24 px short of the last target of the stress level).
+    lengths, masses = np.array([40.0, 40.0]), np.array([1.0, 1.0])
+    inertia = ChainInertia(lengths, masses, masses * lengths**2 / 12)
+    servo = Servo(
+        inertia, max_torque=np.array([2.0e3, 1.0e6]), max_speed=np.full(2, 20.0), gain=12.0
+    )
+    if not floats:
+        servo._floats = None  # the numpy path, as chains longer than FLOAT_LINKS take
+    goal_side = -1.0 if toward else 1.0  # the base's torque points the negative way
+    for tick in range(40):  # 0.17 s, beyond STALL_TIME
+        error = np.array([0.05 * goal_side, -2.0])
+        velocities = np.array([-goal_side * (0.1 + 0.05 * tick), 0.0])  # away, faster and faster
+        command = servo.command(error, np.array([0.3, 0.5]), velocities, (0.0, 0.0), 1 / 240)
+        assert command.torques[0] == pytest.approx(-2.0e3)
+    assert servo.stalled.tolist() == [toward, False]
+
+
 def test_two_hundred_links_swing_over_to_the_other_side_within_their_limits():
     # The longest chain the format allows, under gravity (as the 200-link stress level, with
     # shorter holds): the second target is on the other side of the base. The base runs out of
