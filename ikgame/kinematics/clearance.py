@@ -833,9 +833,9 @@ class Avoider:
         link within ``ACTIVE`` px of the margin of an obstacle nearer it; from then on, until no
         link is that near, the pose held off the obstacles on the last call (the answer, on the
         first) polished onto the target for where the base is now, so that the links near an
-        obstacle come no nearer (and back out to the margin) as the base carries them by. The
-        answers alone, measured at rest on the target, would leave the links to the motors'
-        feed-forward, which holds the target blind to the obstacles."""
+        obstacle come no nearer (and back out to the margin) as the base carries them by. A
+        solver at rest on the target answers with the pose it measures, which leaves the links
+        to the motors' feed-forward: it holds the target, blind to the obstacles."""
         gaps, closing = self._carried_gaps(solution.angles)
         if gaps.min() >= self.clearance.margin + ACTIVE or (self._held_off is None and not closing):
             self._held_off = None
