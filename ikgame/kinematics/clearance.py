@@ -29,9 +29,10 @@ returns the pose to command, keeping the clear answer and the route for the targ
 moves, so they are searched once, and spreading each search over ticks by a budget of counted
 work (``SEARCH_BUDGET``) so that no tick carries a whole one; a chain at rest or in the open
 costs two products of the links' levers a tick.
-While the base moves it plans nothing (a plan would be stale by the next tick). An answer
-arrives when every targeted end is within the tolerance of its target. Angles are radians,
-distances px.
+While the base moves it plans nothing (a plan would be stale by the next tick): it only holds
+off an obstacle the links the solver's answers bring nearer it, polishing the pose it commanded
+onto the target for where the base is now. An answer arrives when every targeted end is within the tolerance of its target.
+Angles are radians, distances px.
 """
 
 from __future__ import annotations
@@ -94,6 +95,15 @@ POLISH_ITERATIONS: Final = 80
 FREE_ITERATIONS: Final = 400
 """Most iterations of the obstacle-free polish that finds how near a target set's ends can come
 (see :meth:`Clearance.clear_answer`)."""
+
+HOLD_OFF_ITERATIONS: Final = 5
+"""Most polish iterations a call of an :class:`Avoider` spends holding links off the obstacles
+while the base carries the skeleton."""
+
+CARRIED_STEP: Final = 2.0
+"""Farthest the base and the joints may carry a link (px) before an :class:`Avoider` measures
+the gaps of a carried skeleton again: a link coming near an obstacle is noticed at most this
+late."""
 
 STALE_ITERATIONS: Final = 12
 """A polish that has not improved on its best pose for this many iterations stops there."""
@@ -694,7 +704,12 @@ class Avoider:
     found, the solver's own solution is returned for that target: the chain behaves as without
     obstacles (and a jammed one is reported blocked). With ``replan``, a chain the motors carried
     off the planned line, whose straight way on to its via pose is blocked from where it is, gets a
-    new route from there.
+    new route from there. While the base moves (its :attr:`clearance`'s skeleton is another
+    one each call) nothing is planned, and the solver's answers are handed on until they bring
+    a link within ``ACTIVE`` px of the margin of an obstacle nearer it: from then on, until no
+    link is that near, the pose commanded the call before is polished onto the target for where
+    the base is now (``HOLD_OFF_ITERATIONS`` iterations at most), so the links near it come no
+    nearer as the base carries them by.
 
     The search is spread over calls: each does at most ``budget`` units of its work
     (``ITERATION_UNITS`` per polish iteration, ``CHECK_UNITS`` per step of a path check and
@@ -741,6 +756,8 @@ class Avoider:
         """Units of search work one call does at most before its last step (``math.inf``: the
         whole search in one call)."""
         self._skeleton = clearance.skeleton
+        self._held_off: np.ndarray | None = None
+        self._carried: tuple[Skeleton, np.ndarray, np.ndarray, bool] | None = None
         self.reset()
 
     def reset(self) -> None:
@@ -795,11 +812,13 @@ class Avoider:
         room = self.clearance
         if room.skeleton is not self._skeleton:
             # The base moved: a plan made for it is stale, and one made now would be stale by the
-            # next tick, so the solver answers until the base stands still again.
+            # next tick, so the solver answers until the base stands still again, held off the
+            # obstacles.
             self._skeleton = room.skeleton
             self.reset()
             self._unchecked = True
-            return solution
+            return self._hold_off(solution, target, tolerance)
+        self._held_off = self._carried = None
         key = _key(target)
         if key == self._given_up:
             self._unchecked = True
@@ -832,6 +851,53 @@ class Avoider:
                 work = self._planning(measured, solution.angles, target, tolerance, goal)
                 search = self._begin(key, measured, work, reroute=False)
         return self._advance(search, measured, solution)
+
+    def _hold_off(
+        self, solution: Solution, target: np.ndarray | TargetSet, tolerance: float
+    ) -> Solution:
+        """While the base carries the skeleton: the solver's answer, until the answers bring a
+        link within ``ACTIVE`` px of the margin of an obstacle nearer it; from then on, until no
+        link is that near, the pose held off the obstacles on the last call (the answer, on the
+        first) polished onto the target for where the base is now, so that the links near an
+        obstacle come no nearer (and back out to the margin) as the base carries them by. A
+        solver at rest on the target answers with the pose it measures, which leaves the links
+        to the motors' feed-forward: it holds the target, blind to the obstacles."""
+        gaps, closing = self._carried_gaps(solution.angles)
+        if gaps.min() >= self.clearance.margin + ACTIVE or (self._held_off is None and not closing):
+            self._held_off = None
+            return solution
+        start = solution.angles if self._held_off is None else self._held_off
+        polished = self.clearance.polish(
+            start, target, iterations=HOLD_OFF_ITERATIONS, tolerance=tolerance
+        )
+        self._held_off = polished.angles
+        # An unreachable target stays a failure, held off the obstacles or not.
+        status = solution.status if solution.status is SolveStatus.FAILURE else polished.status
+        return Solution(polished.angles, status, solution.iterations, polished.error)
+
+    def _carried_gaps(self, pose: np.ndarray) -> tuple[np.ndarray, bool]:
+        """Each link's gap (px) at the carried skeleton's ``pose``, and whether a link within
+        ``ACTIVE`` px of the margin has come nearer since the gaps were measured before (a first
+        link the base slides along a floor stays as near, and does not count).
+
+        The gaps are measured again only when the base and the joints could have carried a link
+        into that reach since the last measure, and then more than ``CARRIED_STEP`` px; until
+        then the last measure stands."""
+        room = self.clearance
+        skeleton = room.skeleton
+        reach = room.margin + ACTIVE
+        carried = self._carried
+        if carried is not None:
+            was, since, gaps, closing = carried
+            shift = math.dist(skeleton.base, was.base)
+            shift += abs(skeleton.base_angle - was.base_angle) * skeleton.reach
+            moved = shift + room.swept_links(since, pose)
+            if np.all((gaps - moved >= reach) | (moved <= CARRIED_STEP)):
+                return gaps, closing
+        fresh = room.gaps(pose)
+        closing = carried is not None and bool(np.any((fresh < reach) & (fresh < carried[2])))
+        self._carried = (skeleton, pose.copy(), fresh, closing)
+        return fresh, closing
 
     def _begin(
         self,

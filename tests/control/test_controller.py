@@ -75,6 +75,26 @@ def test_with_an_avoider_the_chain_goes_under_the_shelf_without_touching_it(solv
         assert np.hypot(*(room.points(pose)[-1] - target)) <= 1.0
 
 
+def test_a_chain_its_base_carries_toward_its_target_is_held_off_the_floor():
+    # Six 50 px links hold their tip on a point to the left while the base slides 70 px toward
+    # it over a floor: the least-norm way to keep the tip there (DLS) folds the chain down, 5 px
+    # into the floor by the end when nothing holds it off.
+    arm = Skeleton.chain(
+        [50.0] * 6, base=(50.0, 0.0), base_angle=math.pi / 2, limits=[(-2.618, 2.618)] * 6
+    )
+    floor = Obstacles.from_arrays(np.array([[-800.0, -20.0, 800.0, -20.0, 4.0]]), np.empty((0, 3)))
+    room = Clearance(arm, np.full(6, 6.0), floor)
+    ctl = Controller(arm, "dls", max_speed=np.full(6, 2 * math.pi), avoider=Avoider(room))
+    pose = np.array([1.455, 0.098, -0.147, -0.335, -0.379, -0.147])
+    target, dt = np.array([-200.0, 120.0]), 1.0 / 240.0
+    for tick in range(140):
+        ctl.skeleton = arm.moved_to((50.0 - 0.5 * (tick + 1), 0.0))
+        pose = pose + ctl.command(pose, target).rates * dt
+        assert room.gaps(pose).min() > room.margin
+        # Behind by no more than the gain's lag (120 px/s at 12/s): the target is still held.
+        assert room.misses(pose, target)[0] < 10.0
+
+
 def test_branches_on_the_base_follow_their_targets_each_at_its_own_speed():
     # Two legs hang from a body that moves: the first leg's foot holds still, the second's
     # target sweeps away faster than its joints can turn. Only the second leg's rates are

@@ -318,6 +318,28 @@ def test_while_the_base_moves_the_solver_answers_and_the_plan_is_dropped():
     assert replanned is not through and room.is_clear(replanned.angles)
 
 
+def test_while_the_base_carries_a_link_nearer_an_obstacle_the_pose_is_held_off_it():
+    # The base slides right under an upright answer (as a solver at rest on the target hands on
+    # the pose it measures): the middle link closes in on the shelf's end, then runs into it.
+    room = _shelf_room()
+    guide = Avoider(room)
+    upright = Solution(np.zeros(3), SolveStatus.SUCCESS, 10, 0.0)
+    target = np.array([110.0, 350.0])
+    handed_on = []
+    for x in np.arange(108.0, 126.0, 2.0):
+        room.skeleton = room.skeleton.moved_to((x, 0.0))
+        steered = guide.steer(np.zeros(3), upright, target, 0.5)
+        assert not guide.planning
+        handed_on.append(steered is upright)
+        if x >= 114.0:
+            assert room.gaps(steered.angles).min() > room.margin - 0.5
+            assert room.misses(steered.angles, target)[0] <= 0.5
+    assert room.gaps(upright.angles).min() < -5.0
+    # Handed on while no link comes within 10 px (the reach of the polish's clearance rows),
+    # held off from the first measure that sees the link closing in.
+    assert handed_on == [True, True] + [False] * 7
+
+
 def _two_arms_room() -> Clearance:
     """A torso of two links with two arms of three links each (the stress level with two arms),
     standing 20 px above a floor."""
