@@ -15,7 +15,7 @@ from __future__ import annotations
 import math
 import struct
 from collections import Counter
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from fractions import Fraction
 from functools import lru_cache
 from typing import IO
@@ -26,29 +26,53 @@ from PIL import GifImagePlugin, Image
 from ikgame.render.png import PNG_SIGNATURE, png_chunk, png_chunks
 from ikgame.render.theme import RGB, Theme
 
-__all__ = ["ApngWriter", "GifWriter", "build_palette", "gif_durations", "quantizer"]
+__all__ = [
+    "ApngWriter",
+    "GifWriter",
+    "build_palette",
+    "color_counts",
+    "gif_durations",
+    "quantizer",
+]
 
 GIF_COLORS = 255  # palette entries for pixels; the 256th is the transparent "unchanged" index
 GIF_TRANSPARENT = 255
 GIF_FREQUENT = 64  # most common exact colours kept as they are: the flat fills never dither
+# New colours matched to the palette at a time: each block's distances to the 255 entries take
+# 512 * 255 * 3 * 4 bytes (1.6 MB), where 4096 at int64 took 25 MB, three times over at once.
+NEAREST_BLOCK = 512
 
 
 # -- GIF -----------------------------------------------------------------------------------------
 
 
-def build_palette(samples: Sequence[Image.Image], theme: Theme, extra: Sequence[RGB] = ()) -> bytes:
-    """One palette for the whole GIF, ``GIF_COLORS`` RGB entries, from a sample of frames.
+def color_counts(image: Image.Image) -> list[tuple[int, RGB]]:
+    """Each colour of ``image`` with its number of pixels, ``(count, (r, g, b))``: what
+    :func:`build_palette` needs of a sample frame, a few thousand pairs where the frame is
+    millions of bytes.
+
+    >>> color_counts(Image.new("RGB", (3, 2), (9, 8, 7)))
+    [(6, (9, 8, 7))]
+    """
+    rgb = image if image.mode == "RGB" else image.convert("RGB")  # no copy of a frame
+    return rgb.getcolors(rgb.width * rgb.height) or []
+
+
+def build_palette(
+    samples: Iterable[Sequence[tuple[int, RGB]]], theme: Theme, extra: Sequence[RGB] = ()
+) -> bytes:
+    """One palette for the whole GIF, ``GIF_COLORS`` RGB entries, from the
+    :func:`color_counts` of a sample of frames.
 
     The theme's colours, the ``extra`` colours (a tree's effector colours) and the samples'
     most common exact colours come first, so flat fills map to themselves with no dithering;
     the rest of the entries adapt (median cut) to the remaining pixels: anti-aliased edges, the
-    trail's fade, text.
+    trail's fade, text. ``samples`` is read once, one frame's counts at a time, so a caller can
+    draw each sample, count it and let it go before drawing the next.
     """
-    # Counted sample by sample and added up, rather than stacked into one tall image first.
-    totals: Counter[tuple[int, int, int]] = Counter()
-    for image in samples:
-        rgb = image.convert("RGB")
-        totals.update({c: n for n, c in rgb.getcolors(rgb.width * rgb.height) or []})
+    totals: Counter[RGB] = Counter()
+    for counts in samples:
+        totals.update({c: n for n, c in counts})
     counts = sorted(((n, rgb) for rgb, n in totals.items()), key=lambda item: (-item[0], item[1]))
     frequent = [rgb for _, rgb in counts[:GIF_FREQUENT]]
     fixed = list(dict.fromkeys(theme.colors() + list(extra) + frequent))
@@ -103,14 +127,17 @@ class _Quantizer:
         return found.tobytes()
 
     def _nearest(self, packed: np.ndarray) -> np.ndarray:
-        # Weighted RGB distance (2, 4, 3): a cheap stand-in for perceived difference.
-        weights = np.array([2, 4, 3], dtype=np.int64)
+        # Weighted RGB distance (2, 4, 3): a cheap stand-in for perceived difference. At most
+        # (2 + 4 + 3) * 255^2, so int32 holds it exactly.
+        weights = np.array([2, 4, 3], dtype=np.int32)
         out = np.empty(len(packed), dtype=np.uint8)
-        for start in range(0, len(packed), 4096):
-            block = packed[start : start + 4096].astype(np.int64)
+        for start in range(0, len(packed), NEAREST_BLOCK):
+            block = packed[start : start + NEAREST_BLOCK].astype(np.int32)
             rgb = np.stack([block & 255, block >> 8 & 255, block >> 16], axis=1)
             diff = rgb[:, None, :] - self.colors[None, :, :]
-            out[start : start + 4096] = np.argmin((diff * diff * weights).sum(axis=2), axis=1)
+            diff *= diff
+            diff *= weights
+            out[start : start + NEAREST_BLOCK] = np.argmin(diff.sum(axis=2), axis=1)
         return out
 
 
