@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import tracemalloc
 
 import numpy as np
@@ -94,6 +95,23 @@ def test_many_new_colours_map_to_the_nearest_entry_in_a_few_mb():
     diff = pixels.reshape(-1, 1, 3).astype(int) - colours[None]
     nearest = np.argmin((diff * diff * [2, 4, 3]).sum(axis=2), axis=1)
     assert np.array_equal(indices, nearest)
+
+
+def _resident_mb() -> float:
+    with open("/proc/self/status") as status:
+        return next(int(line.split()[1]) for line in status if line.startswith("VmRSS")) / 1024
+
+
+@pytest.mark.skipif(not os.path.exists("/proc/self/status"), reason="reads Linux /proc")
+def test_the_colour_table_takes_memory_only_where_colours_are_written():
+    """A run's colours are scattered over the 16 MB table: only the small pages they land on
+    may take memory, not the whole table in 2 MB pages."""
+    table = animation._zeroed(1 << 24)
+    scattered = np.random.default_rng(5).integers(0, 1 << 24, 600)
+    before = _resident_mb()
+    table[scattered] = 1
+    assert _resident_mb() - before < 6
+    assert table.sum() == len(np.unique(scattered))
 
 
 def test_a_trees_effector_colours_are_exact_palette_entries(tmp_path, tree_run):
