@@ -13,9 +13,10 @@ encoded PNG frames' image data as is, so nothing is compressed twice.
 from __future__ import annotations
 
 import math
+import mmap
 import struct
 from collections import Counter
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from fractions import Fraction
 from functools import lru_cache
 from typing import IO
@@ -26,29 +27,53 @@ from PIL import GifImagePlugin, Image
 from ikgame.render.png import PNG_SIGNATURE, png_chunk, png_chunks
 from ikgame.render.theme import RGB, Theme
 
-__all__ = ["ApngWriter", "GifWriter", "build_palette", "gif_durations", "quantizer"]
+__all__ = [
+    "ApngWriter",
+    "GifWriter",
+    "build_palette",
+    "color_counts",
+    "gif_durations",
+    "quantizer",
+]
 
 GIF_COLORS = 255  # palette entries for pixels; the 256th is the transparent "unchanged" index
 GIF_TRANSPARENT = 255
 GIF_FREQUENT = 64  # most common exact colours kept as they are: the flat fills never dither
+# New colours matched to the palette at a time: a frame can bring thousands (a sprite, a
+# gradient), and each block's distances to the 255 entries take 512 * 255 * 3 * 4 bytes (1.6 MB).
+NEAREST_BLOCK = 512
 
 
 # -- GIF -----------------------------------------------------------------------------------------
 
 
-def build_palette(samples: Sequence[Image.Image], theme: Theme, extra: Sequence[RGB] = ()) -> bytes:
-    """One palette for the whole GIF, ``GIF_COLORS`` RGB entries, from a sample of frames.
+def color_counts(image: Image.Image) -> list[tuple[int, RGB]]:
+    """Each colour of ``image`` with its number of pixels, ``(count, (r, g, b))``: what
+    :func:`build_palette` needs of a sample frame, a few thousand pairs where the frame is
+    millions of bytes.
+
+    >>> color_counts(Image.new("RGB", (3, 2), (9, 8, 7)))
+    [(6, (9, 8, 7))]
+    """
+    rgb = image if image.mode == "RGB" else image.convert("RGB")  # no copy of a frame
+    return rgb.getcolors(rgb.width * rgb.height) or []
+
+
+def build_palette(
+    samples: Iterable[Sequence[tuple[int, RGB]]], theme: Theme, extra: Sequence[RGB] = ()
+) -> bytes:
+    """One palette for the whole GIF, ``GIF_COLORS`` RGB entries, from the
+    :func:`color_counts` of a sample of frames.
 
     The theme's colours, the ``extra`` colours (a tree's effector colours) and the samples'
     most common exact colours come first, so flat fills map to themselves with no dithering;
     the rest of the entries adapt (median cut) to the remaining pixels: anti-aliased edges, the
-    trail's fade, text.
+    trail's fade, text. ``samples`` is read once, one frame's counts at a time, so a caller can
+    draw each sample, count it and let it go before drawing the next.
     """
-    # Counted sample by sample and added up, rather than stacked into one tall image first.
-    totals: Counter[tuple[int, int, int]] = Counter()
-    for image in samples:
-        rgb = image.convert("RGB")
-        totals.update({c: n for n, c in rgb.getcolors(rgb.width * rgb.height) or []})
+    totals: Counter[RGB] = Counter()
+    for counts in samples:
+        totals.update({c: n for n, c in counts})
     counts = sorted(((n, rgb) for rgb, n in totals.items()), key=lambda item: (-item[0], item[1]))
     frequent = [rgb for _, rgb in counts[:GIF_FREQUENT]]
     fixed = list(dict.fromkeys(theme.colors() + list(extra) + frequent))
@@ -83,9 +108,8 @@ class _Quantizer:
     def __init__(self, palette: bytes) -> None:
         self.colors = np.frombuffer(palette, dtype=np.uint8).reshape(-1, 3).astype(np.int32)
         # Index + 1 per colour, 0 for colours not looked up yet: a zeroed table is memory the
-        # system hands out untouched, so only the pages of colours that occur take up room
-        # (a few MB, where a table filled with a marker would be 16 MB in every process).
-        self.table = np.zeros(1 << 24, dtype=np.uint8)
+        # system hands out untouched, so only the pages of colours that occur take up room.
+        self.table = _zeroed(1 << 24)
 
     def indices(self, image: Image.Image) -> bytes:
         # RGBX is Pillow's own layout: one little-endian uint32 per pixel, R in the low byte,
@@ -103,15 +127,33 @@ class _Quantizer:
         return found.tobytes()
 
     def _nearest(self, packed: np.ndarray) -> np.ndarray:
-        # Weighted RGB distance (2, 4, 3): a cheap stand-in for perceived difference.
-        weights = np.array([2, 4, 3], dtype=np.int64)
+        # Weighted RGB distance (2, 4, 3): a cheap stand-in for perceived difference. At most
+        # (2 + 4 + 3) * 255^2, so int32 holds it exactly.
+        weights = np.array([2, 4, 3], dtype=np.int32)
         out = np.empty(len(packed), dtype=np.uint8)
-        for start in range(0, len(packed), 4096):
-            block = packed[start : start + 4096].astype(np.int64)
+        for start in range(0, len(packed), NEAREST_BLOCK):
+            block = packed[start : start + NEAREST_BLOCK].astype(np.int32)
             rgb = np.stack([block & 255, block >> 8 & 255, block >> 16], axis=1)
             diff = rgb[:, None, :] - self.colors[None, :, :]
-            out[start : start + 4096] = np.argmin((diff * diff * weights).sum(axis=2), axis=1)
+            diff *= diff
+            diff *= weights
+            out[start : start + NEAREST_BLOCK] = np.argmin(diff.sum(axis=2), axis=1)
         return out
+
+
+def _zeroed(size: int) -> np.ndarray:
+    """``size`` zero bytes, (size,) uint8, of which only the 4 KB pages written to take memory.
+
+    Not ``np.zeros``: NumPy asks Linux for 2 MB pages on arrays of 4 MB and more, and a 2 MB
+    page is taken whole at its first write, so the colour table's scattered colours took up
+    14 of its 16 MB (555 pages of 4 KB, 2 MB, for all of a 960x540 ``06_circle``).
+    """
+    if not hasattr(mmap, "MAP_PRIVATE"):  # Windows: no flags, and no 2 MB pages unasked
+        return np.zeros(size, dtype=np.uint8)
+    memory = mmap.mmap(-1, size, flags=mmap.MAP_PRIVATE)  # shared memory is taken when read
+    if hasattr(mmap, "MADV_NOHUGEPAGE"):
+        memory.madvise(mmap.MADV_NOHUGEPAGE)  # where 2 MB pages are the system's default
+    return np.frombuffer(memory, dtype=np.uint8)
 
 
 @lru_cache(maxsize=1)

@@ -34,13 +34,20 @@ from PIL import Image, ImageDraw, ImageFont
 
 from ikgame._files import atomic_open, write_atomic
 from ikgame._progress import progress_bar
-from ikgame.render.animation import ApngWriter, GifWriter, build_palette, gif_durations, quantizer
+from ikgame.render.animation import (
+    ApngWriter,
+    GifWriter,
+    build_palette,
+    color_counts,
+    gif_durations,
+    quantizer,
+)
 from ikgame.render.camera import Camera
 from ikgame.render.motion import check_run, motion_json, write_motion
 from ikgame.render.output import check_export_size, check_out_dir, parse_size
 from ikgame.render.pillow import render_snapshot
 from ikgame.render.png import check_compress_level, png_bytes
-from ikgame.render.theme import Theme, load_theme
+from ikgame.render.theme import RGB, Theme, load_theme
 from ikgame.render.video import Mp4Writer, check_video, even_size
 from ikgame.snapshot import Scene, Snapshot, effector_positions
 
@@ -170,10 +177,12 @@ def _worker_payloads(
     ]
 
 
-def _worker_rgb(snapshots: tuple[Snapshot, ...], first: int, index: int) -> bytes:
+def _worker_colors(
+    snapshots: tuple[Snapshot, ...], first: int, index: int
+) -> list[tuple[int, RGB]]:
     assert _WORKER_JOB is not None, "worker used without _init_worker"
     job = replace(_WORKER_JOB, snapshots=snapshots, first=first)
-    return job.render(index).tobytes()
+    return color_counts(job.render(index))
 
 
 def _main_importable() -> bool:
@@ -252,16 +261,17 @@ def _payloads(
             yield png, None if packed is None else zlib.decompress(packed), rgb
 
 
-def _sample_images(
+def _sample_colors(
     job: _Job, pool: ProcessPoolExecutor | None, indices: Sequence[int]
-) -> list[Image.Image]:
+) -> Iterator[list[tuple[int, RGB]]]:
+    """The :func:`color_counts` of frames ``indices``, one frame at a time: the frames
+    themselves are let go as soon as they are counted, here or in a worker."""
     if pool is None:
-        return [job.render(i) for i in indices]
+        return (color_counts(job.render(i)) for i in indices)
     windows = [job.window(i, i + 1) for i in indices]
-    raws = pool.map(
-        _worker_rgb, [w.snapshots for w in windows], [w.first for w in windows], indices
+    return pool.map(
+        _worker_colors, [w.snapshots for w in windows], [w.first for w in windows], indices
     )
-    return [Image.frombytes("RGB", job.camera.size, raw) for raw in raws]
 
 
 def _sample_indices(count: int, wanted: int) -> list[int]:
@@ -420,7 +430,7 @@ def _write_frames(
         if gif:
             styles = job.theme.effector_styles(len(job.scene.effectors))
             palette = build_palette(
-                _sample_images(job, pool, samples),
+                _sample_colors(job, pool, samples),
                 job.theme,
                 [c for style in styles for c in style.colors()],
             )

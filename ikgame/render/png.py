@@ -31,7 +31,8 @@ def png_bytes(image: Image.Image, compress_level: int = 1) -> bytes:
     """
     check_compress_level(compress_level)
     mode, colour_type = ("RGBA", 6) if image.mode in ("RGBA", "LA", "PA") else ("RGB", 2)
-    pixels = np.asarray(image.convert(mode))
+    # Frames are RGB already: converting would copy one for nothing.
+    pixels = np.asarray(image if image.mode == mode else image.convert(mode))
     height, width = pixels.shape[:2]
     rows = pixels.reshape(height, -1)
     filtered = np.empty((height, rows.shape[1] + 1), dtype=np.uint8)
@@ -43,7 +44,7 @@ def png_bytes(image: Image.Image, compress_level: int = 1) -> bytes:
         [
             PNG_SIGNATURE,
             png_chunk(b"IHDR", header),
-            png_chunk(b"IDAT", zlib.compress(filtered.tobytes(), compress_level)),
+            png_chunk(b"IDAT", zlib.compress(filtered, compress_level)),
             png_chunk(b"IEND", b""),
         ]
     )

@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import os
+import tracemalloc
+
 import numpy as np
 import pytest
 from PIL import Image
@@ -74,11 +77,48 @@ def test_quantizer_keeps_palette_colours_exact_and_maps_others_to_the_nearest():
     assert list(animation._Quantizer(palette).indices(image)) == [0, 2, 1]
 
 
+def test_many_new_colours_map_to_the_nearest_entry_in_a_few_mb():
+    """A frame full of colours not seen before (a sprite, a gradient) is matched to the
+    palette a block at a time: the distances of all of them at once would take 100 MB."""
+    rng = np.random.default_rng(7)
+    palette = rng.integers(0, 256, 3 * animation.GIF_COLORS, dtype=np.uint8).tobytes()
+    pixels = rng.integers(0, 256, (64, 128, 3), dtype=np.uint8)  # 8192 colours, nearly all new
+    quantizer = animation._Quantizer(palette)
+    tracemalloc.start()
+    try:
+        indices = np.frombuffer(quantizer.indices(Image.fromarray(pixels)), dtype=np.uint8)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak < 8 * 2**20
+    colours = np.frombuffer(palette, dtype=np.uint8).reshape(-1, 3).astype(int)
+    diff = pixels.reshape(-1, 1, 3).astype(int) - colours[None]
+    nearest = np.argmin((diff * diff * [2, 4, 3]).sum(axis=2), axis=1)
+    assert np.array_equal(indices, nearest)
+
+
+def _resident_mb() -> float:
+    with open("/proc/self/status") as status:
+        return next(int(line.split()[1]) for line in status if line.startswith("VmRSS")) / 1024
+
+
+@pytest.mark.skipif(not os.path.exists("/proc/self/status"), reason="reads Linux /proc")
+def test_the_colour_table_takes_memory_only_where_colours_are_written():
+    """A run's colours are scattered over the 16 MB table: only the small pages they land on
+    may take memory, not the whole table in 2 MB pages."""
+    table = animation._zeroed(1 << 24)
+    scattered = np.random.default_rng(5).integers(0, 1 << 24, 600)
+    before = _resident_mb()
+    table[scattered] = 1
+    assert _resident_mb() - before < 6
+    assert table.sum() == len(np.unique(scattered))
+
+
 def test_a_trees_effector_colours_are_exact_palette_entries(tmp_path, tree_run):
     theme = load_theme("light")
-    blank = [Image.new("RGB", SIZE, theme.background)]
+    blank = [animation.color_counts(Image.new("RGB", SIZE, theme.background))]
     extra = [(1, 2, 3), (250, 1, 2)]
-    colours = animation.build_palette(blank, theme, extra)
+    colours = animation.build_palette(iter(blank), theme, extra)
     entries = [tuple(colours[i : i + 3]) for i in range(0, len(colours), 3)]
     assert set(extra) <= set(entries) and set(theme.colors()) <= set(entries)
     # An exported tree's GIF keeps each effector's tip colour exact.

@@ -7,6 +7,7 @@ import hashlib
 import json
 import math
 import os
+import weakref
 
 import numpy as np
 import pytest
@@ -179,6 +180,25 @@ def test_parallel_export_is_byte_identical_to_serial(tmp_path, run):
     serial, parallel = _digests(tmp_path / "serial"), _digests(tmp_path / "parallel")
     assert len(serial) == len(snaps) + 4
     assert serial == parallel
+
+
+def test_the_gif_palette_holds_one_sample_frame_at_a_time(tmp_path, run, monkeypatch):
+    """Each sample frame is counted and let go before the next is drawn: the palette needs
+    their colour counts, not a dozen frames held at once."""
+    scene, snaps = run(60)
+    original = export.color_counts
+    alive: list[weakref.ref] = []
+    counted = []
+
+    def count(image):
+        assert all(ref() is None for ref in alive), "an earlier sample frame is still held"
+        alive.append(weakref.ref(image))
+        counted.append(original(image))
+        return counted[-1]
+
+    monkeypatch.setattr(export, "color_counts", count)
+    _export(tmp_path, scene, snaps, frames=False, motion=False)
+    assert len(counted) == export.SHEET_THUMBS
 
 
 def test_trail_covers_the_last_seconds(run):

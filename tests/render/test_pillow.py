@@ -109,6 +109,22 @@ def test_rendering_is_deterministic(run):
     assert first == second
 
 
+def test_the_static_layer_is_held_as_exact_flat_fills_a_byte_per_pixel(run):
+    """The supersampled static layer is a palette image of the theme's fills alone, and the
+    shrunk layer, made strip by strip, is the block average of the whole layer in RGB."""
+    scene, snaps = run(2)
+    camera = Camera.fit(scene, snaps, (160, 3 * pillow.STATIC_STRIP // 2))  # a partial strip
+    pillow._static_layers.cache_clear()
+    big, small = pillow._static_layers(scene, camera, LIGHT, 3)
+    assert big.mode == "P" and big.size == camera.scaled(3).size
+    goal_fill = pillow._blend(LIGHT.background, LIGHT.goal, pillow.GOAL_FILL_ALPHA)
+    fills = {LIGHT.background, LIGHT.grid, goal_fill, LIGHT.goal}
+    fills |= {LIGHT.obstacle, LIGHT.obstacle_outline}
+    rgb = big.convert("RGB")
+    assert {color for _, color in rgb.getcolors()} == fills
+    assert small.mode == "RGB" and small.tobytes() == rgb.reduce(3).tobytes()
+
+
 def test_redrawing_only_the_moving_parts_matches_a_full_frame(run):
     """render_snapshot redraws only the rectangle around the moving parts and shrinks only the
     tiles they touch: nothing may be clipped, so it matches drawing and shrinking the whole frame
@@ -120,7 +136,7 @@ def test_redrawing_only_the_moving_parts_matches_a_full_frame(run):
     fast = render_snapshot(scene, snaps[3], camera, LIGHT, trail=trail, hud=False)
 
     big = camera.scaled(3)
-    full = pillow._static_layers(scene, camera, LIGHT, 3)[0].copy()
+    full = pillow._static_layers(scene, camera, LIGHT, 3)[0].convert("RGB")
     pillow._draw_dynamic(
         pillow._Painter(ImageDraw.Draw(full), big, LIGHT, 3), scene, snaps[3], trail
     )
@@ -300,7 +316,7 @@ def test_redrawing_only_a_trees_moving_parts_matches_a_full_frame(tree_run):
 
     trail = trail_at(scene, snaps, 3)
     fast = render_snapshot(scene, snaps[3], camera, LIGHT, trail=trail, hud=False)
-    full = pillow._static_layers(scene, camera, LIGHT, 3)[0].copy()
+    full = pillow._static_layers(scene, camera, LIGHT, 3)[0].convert("RGB")
     pillow._draw_dynamic(
         pillow._Painter(ImageDraw.Draw(full), camera.scaled(3), LIGHT, 3), scene, snaps[3], trail
     )

@@ -1,6 +1,7 @@
 """The PNG encoder: files any decoder reads back to the same pixels, at every level."""
 
 import io
+import tracemalloc
 
 import numpy as np
 import pytest
@@ -50,3 +51,17 @@ def test_bad_levels_raise(level):
 def test_chunks_of_a_non_png_raise():
     with pytest.raises(ValueError, match="not a PNG"):
         list(png_chunks(b"GIF89a"))
+
+
+def test_a_frame_is_encoded_with_its_filtered_rows_as_the_one_copy():
+    """An RGB frame is read as it is and its filtered rows go to zlib as they are: the pixels
+    and the filtered rows, no third copy of a frame per encoding."""
+    image = Image.new("RGB", (960, 540), (240, 240, 235))
+    frame_bytes = 960 * 540 * 3
+    tracemalloc.start()
+    try:
+        png_bytes(image)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak < 2.5 * frame_bytes
