@@ -476,16 +476,24 @@ class Clearance:
         ``RANDOM_SEEDS`` random poses within the limits (seeded): of ``RANDOM_POOL`` drawn, the
         clear ones whose targeted ends come nearest their targets (weighted), then the others
         by the same measure."""
+        return [*self._deliberate_seeds(measured, answer), *self._random_seeds(target)]
+
+    def _deliberate_seeds(self, measured: np.ndarray, answer: np.ndarray) -> list[np.ndarray]:
+        """The seeds of :meth:`seeds` before the random ones."""
         sk = self.skeleton
         n = sk.count
-        roots = sk.parents < 0
-        reversed_bends = np.where(roots, answer, -answer)
-        low = np.maximum(sk.lower, -math.pi)
-        high = np.minimum(sk.upper, math.pi)
+        reversed_bends = np.where(sk.parents < 0, answer, -answer)
         curl = math.pi / max(n, 2)
         starts = [measured, answer, reversed_bends, np.full(n, curl), np.full(n, -curl)]
+        return [sk.clamp(np.asarray(s, dtype=float)) for s in starts]
+
+    def _random_seeds(self, target: np.ndarray | TargetSet) -> list[np.ndarray]:
+        """The random seeds of :meth:`seeds`."""
+        sk = self.skeleton
         rng = np.random.default_rng(RANDOM_SEED)
-        pool = rng.uniform(low, high, (RANDOM_POOL, n))
+        low = np.maximum(sk.lower, -math.pi)
+        high = np.minimum(sk.upper, math.pi)
+        pool = rng.uniform(low, high, (RANDOM_POOL, sk.count))
         links, points, scale = self._aim(target)
         _, ends = self._links(self.points(pool))
         off = points - ends[:, links]
@@ -493,8 +501,7 @@ class Clearance:
         clear = self.smallest_gaps(pool) >= 0.0
         # A pose drawn at random a long way off lands the polish in a fold it cannot leave (a
         # link hooked round an obstacle's end); one already near reaching the target rarely does.
-        starts.extend(pool[np.lexsort((misses, ~clear))[:RANDOM_SEEDS]])
-        return [sk.clamp(np.asarray(s, dtype=float)) for s in starts]
+        return list(sk.clamp(pool[np.lexsort((misses, ~clear))[:RANDOM_SEEDS]]))
 
     def clear_answer(
         self,
@@ -534,17 +541,25 @@ class Clearance:
         measured = np.asarray(measured, float)
         found: list[np.ndarray] = []
         short: list[Solution] = []
-        # Drawing and measuring the pool of random seeds, counted as that many poses checked.
-        yield POSE_UNITS * RANDOM_POOL * self.skeleton.count * len(self.obstacles)
-        for start in self.seeds(measured, np.asarray(answer, float), target):
-            sol = yield from self._polishing(start, target, POLISH_ITERATIONS, tolerance, True)
-            if sol.status is not SolveStatus.SUCCESS:
-                if self.is_clear(sol.angles):
-                    short.append(sol)
-                continue
-            if (yield from self._checking(measured, sol.angles)):
-                return sol.angles, True
-            found.append(sol.angles)
+        for drawn in (False, True):
+            if drawn:
+                # Drawing and measuring the pool of random seeds, counted as that many poses
+                # checked: paid only by a search the deliberate seeds did not settle.
+                yield POSE_UNITS * RANDOM_POOL * self.skeleton.count * len(self.obstacles)
+            starts = (
+                self._random_seeds(target)
+                if drawn
+                else self._deliberate_seeds(measured, np.asarray(answer, float))
+            )
+            for start in starts:
+                sol = yield from self._polishing(start, target, POLISH_ITERATIONS, tolerance, True)
+                if sol.status is not SolveStatus.SUCCESS:
+                    if self.is_clear(sol.angles):
+                        short.append(sol)
+                    continue
+                if (yield from self._checking(measured, sol.angles)):
+                    return sol.angles, True
+                found.append(sol.angles)
         if not found and short and not isinstance(target, TargetSet):
             # Close by an obstacle the polish can stall a px short, the pull on the end balanced
             # by the push off the obstacle. From the nearest such pose the end is taken onto the
