@@ -15,8 +15,9 @@ width). A chain aims its end effector at a point; a tree aims a
   ``MARGIN`` (the rows of an inequality, active only near contact).
   :meth:`Clearance.clear_answer` polishes a set of seeds (the measured pose, the straight answer,
   the answer with its bends reversed, poses curled either way, ``RANDOM_SEEDS`` random poses
-  within the limits, the nearest the target of ``RANDOM_POOL`` drawn) and keeps the clear one that arrives nearest the measured pose, preferring
-  one the chain can turn to in a straight line.
+  within the limits, the nearest the target of ``RANDOM_POOL`` drawn) and keeps the clear one
+  that arrives nearest the measured pose, preferring one the chain can turn to in a straight
+  line.
 - **a clear path** (:meth:`Clearance.route`): the motors turn every joint toward its goal
   together, so the chain moves close to the straight line in joint space. When that line sweeps
   through an obstacle (checked at poses no point of the chain moves more than ``PATH_STEP``
@@ -31,8 +32,8 @@ work (``SEARCH_BUDGET``) so that no tick carries a whole one; a chain at rest or
 costs two products of the links' levers a tick.
 While the base moves it plans nothing (a plan would be stale by the next tick): it only holds
 off an obstacle the links the solver's answers bring nearer it, polishing the pose it commanded
-onto the target for where the base is now. An answer arrives when every targeted end is within the tolerance of its target.
-Angles are radians, distances px.
+onto the target for where the base is now. An answer arrives when every targeted end is within
+the tolerance of its target. Angles are radians, distances px.
 """
 
 from __future__ import annotations
