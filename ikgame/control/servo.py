@@ -9,9 +9,9 @@ This servo instead:
    is the deceleration the joint's spare torque (its limit less what gravity takes) gives the
    inertia beyond it: a velocity it can still brake from in time;
 2. never asks a joint for a velocity change it cannot make in one tick (``a x dt``), and a
-   joint at its torque limit toward its goal yet carried away from it asks only to stop until
-   the target moves (anti-windup): it comes to rest where its torque runs out instead of
-   swinging there;
+   joint at its torque limit toward its goal yet carried away from it, with its static load
+   taking at least half its torque that way, asks only to stop until the target moves
+   (anti-windup): it comes to rest where its torque runs out instead of swinging there;
 3. turns the wanted velocity change into feed-forward torques and pivot forces with the chain's
    dynamics (:func:`~ikgame.control.dynamics.plan_drive`), within the torque limits, so that the
    physics engine's motors only correct what the model missed. Without that, the constraint
@@ -40,6 +40,11 @@ last of a previous move's momentum is not a stall."""
 
 STALL_SPEED: Final = 0.02
 """A joint carried away slower than this (rad/s) is creeping, not stalled."""
+
+STALL_LOAD: Final = 0.5
+"""Share of a joint's torque limit its static load (gravity at the pose it is in) must take
+toward its goal for the joint to stall: one carried off while its load leaves it more is carried
+by the chain's own motion, which passes, not held off by a load it cannot beat."""
 
 BRAKE_FLOOR: Final = 0.1
 """Share of a joint's torque limit its braking plans on at least, even where its load leaves
@@ -186,14 +191,17 @@ class Servo:
         # there; it asks only to stop, until :meth:`retry`, so it comes to rest where its
         # torque runs out instead of swinging about that point like a pendulum. Carried away
         # means moving from the goal faster and faster for a while: an overshoot that the motor
-        # is braking slows down instead, and is no stall.
+        # is braking slows down instead, and is no stall. Nor is a joint whose static load
+        # leaves it over half its torque toward the goal stalled: the chain's own motion (a
+        # long chain's swing) carries it off, and that passes.
         carried = (
             np.array(self._pushing)
             & (velocities * error < 0.0)
             & (np.abs(velocities) > np.maximum(np.abs(np.array(self._velocities)), STALL_SPEED))
         )
         carried_for = np.where(carried, np.array(self._carried) + dt, 0.0)
-        stalled = np.array(self._stalled) | (carried_for >= STALL_TIME)
+        loaded = np.sign(error) * hold.torques >= STALL_LOAD * self.max_torque
+        stalled = np.array(self._stalled) | ((carried_for >= STALL_TIME) & loaded)
         self._carried, self._stalled = carried_for.tolist(), stalled.tolist()
         self._velocities = velocities.tolist()
         size = np.where(stalled, 0.0, np.abs(error))
@@ -269,7 +277,7 @@ class Servo:
         up, down, closing, carried, stalled = [], [], [], [], []
         stop_in, closing_total = math.inf, 0.0
         floor_share, brake_share, stall_speed = BRAKE_FLOOR, BRAKE_SHARE, STALL_SPEED
-        stall_time, sqrt = STALL_TIME, math.sqrt
+        stall_time, stall_load, sqrt = STALL_TIME, STALL_LOAD, math.sqrt
         for lim, e, v, i, h, top, pushing, before, was_carried, was_stalled in zip(
             limits,
             errors,
@@ -300,7 +308,9 @@ class Servo:
             else:
                 was_carried = 0.0
             carried.append(was_carried)
-            is_stalled = was_stalled or was_carried >= stall_time
+            is_stalled = was_stalled or (
+                was_carried >= stall_time and _sign(e) * h >= stall_load * lim
+            )
             stalled.append(is_stalled)
             size = 0.0 if is_stalled else abs(e)
             by_gain = gain * size
