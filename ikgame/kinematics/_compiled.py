@@ -16,7 +16,9 @@ from __future__ import annotations
 import functools
 import math
 import os
+import warnings
 from collections.abc import Callable
+from types import ModuleType
 from typing import TYPE_CHECKING, Final
 
 import numpy as np
@@ -79,19 +81,44 @@ def compiled_pass(chain: FloatChain) -> Pass | None:
 
 @functools.cache
 def _kernel() -> Callable[..., int] | None:
-    """:func:`ikgame.kinematics.ccd._iterate` compiled, or None without numba."""
+    """:func:`ikgame.kinematics.ccd._iterate` compiled, or None without numba (or where numba
+    cannot compile it: the Python pass then runs, with a warning)."""
     try:
         import numba
-        from numba.extending import overload, register_jitable
     except ImportError:
         return None
+    from ikgame.kinematics import ccd
+
+    try:
+        _teach(numba)
+        kernel = numba.njit(nogil=True)(ccd._iterate)
+        # Compiled now, on a one-link chain, so that a numba that cannot compile it is found
+        # here rather than in the middle of a solve.
+        one, scratch = np.ones(1), np.zeros(2)
+        free = np.ones(1, dtype=bool)
+        kernel(
+            one, -one, one, free, 0.0, 0.0, 0.0, np.zeros(1), 1.0, 0.0, 0.0, scratch, scratch.copy()
+        )
+    except Exception as exc:  # noqa: BLE001 - an optional speed-up must never stop a run
+        warnings.warn(
+            f"numba could not compile the CCD pass, which runs in Python: {exc}",
+            RuntimeWarning,
+            stacklevel=2,
+        )
+        return None
+    return kernel
+
+
+@functools.cache
+def _teach(numba: ModuleType) -> None:
+    """Tell ``numba`` (once) how to compile what the pass calls."""
+    from numba.extending import overload, register_jitable
+
     from ikgame.kinematics import _floats, ccd
 
     # numba compiles numpy's fmod but not math's; both are C's fmod, which is exact.
     overload(math.fmod)(lambda x, y: lambda x, y: np.fmod(x, y))
-
     # The helpers stay plain Python functions for Python callers; compiled code calls them
     # compiled.
     for helper in (_floats.forward, ccd._rotation_toward, ccd.wrap_angle):
         register_jitable(helper)
-    return numba.njit(nogil=True)(ccd._iterate)

@@ -74,3 +74,22 @@ def test_short_chains_and_a_turned_off_switch_stay_in_python(
     assert _compiled.compiled_pass(long) is not None
     monkeypatch.setenv("IKGAME_COMPILED", "0")
     assert _compiled.compiled_pass(long) is None
+
+
+def test_a_numba_that_cannot_compile_leaves_the_pass_in_python(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    import numba
+
+    def broken(**options: object) -> object:
+        raise RuntimeError("no compiler here")
+
+    monkeypatch.setattr(numba, "njit", broken)
+    _compiled._kernel.cache_clear()
+    try:
+        with pytest.warns(RuntimeWarning, match="runs in Python: no compiler here"):
+            assert _compiled._kernel() is None
+        chain = FloatChain(_long_chain(np.random.default_rng(5), _compiled.COMPILED_LINKS))
+        assert _compiled.compiled_pass(chain) is None
+    finally:
+        _compiled._kernel.cache_clear()
