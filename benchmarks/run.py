@@ -37,7 +37,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ikgame.kinematics import SOLVERS, Skeleton, forward_kinematics
+from ikgame.kinematics import SOLVERS, Skeleton, _compiled, forward_kinematics
 from ikgame.level.library import LEVELS_DIR, shipped_levels
 from ikgame.level.loader import load_level
 from ikgame.level.model import MAX_LINKS, Level
@@ -133,11 +133,28 @@ def _per_tick(step: Callable[[], object], ticks: int) -> float:
     return (time.process_time() - start) / ticks
 
 
+def _in_python(step: Callable[[], object], ticks: int) -> float:
+    """:func:`_per_tick` with the solver's compiled pass turned off."""
+    os.environ["IKGAME_COMPILED"] = "0"
+    try:
+        return _per_tick(step, ticks)
+    finally:
+        del os.environ["IKGAME_COMPILED"]
+
+
 def bench_tick(sizes: list[int], repeats: int) -> None:
     _header("tick: full Simulation.step() against a bare pymunk Space.step of the same space")
     print(f"   bare step: space.iterations = {BARE_ITERATIONS}, dt = 1/240 s, nothing in between")
     print("   CPU time per tick of this process, median of interleaved repeats")
-    print(f"   {'links':>6} {'target':<7}{'full':>11}{'bare':>11}{'ratio':>8}   ")
+    compiled = _compiled._kernel() is not None
+    if compiled:
+        print(
+            f"   python: the same tick with the solver's compiled pass turned off "
+            f"(IKGAME_COMPILED=0; chains of {_compiled.COMPILED_LINKS}+ links use it)"
+        )
+    else:
+        print("   numba is not installed: no compiled pass to compare (pip install -e '.[fast]')")
+    print(f"   {'links':>6} {'target':<7}{'full':>11}{'bare':>11}{'ratio':>8}{'python':>11}   ")
     fits: dict[str, list[tuple[int, float, float]]] = {"reach": [], "circle": []}
     for links in sizes:
         ticks = max(4, min(400, 40_000 // links))
@@ -153,16 +170,24 @@ def bench_tick(sizes: list[int], repeats: int) -> None:
                 # Without the return sweep: a copy keeps the order the world added its
                 # constraints in, and the sweep's pivot and motor per link come last.
                 bare.remove(*list(bare.constraints)[-2 * links :])
-            full_times, bare_times = [], []
+            python = None
+            if compiled and links >= _compiled.COMPILED_LINKS:
+                # The same run again in Python, from the same state (the same floats).
+                python = Simulation(level, record=False)
+                _in_python(python.step, ticks)
+            full_times, bare_times, python_times = [], [], []
             for _ in range(repeats):
                 full_times.append(_per_tick(sim.step, ticks))
                 bare_times.append(_per_tick(lambda: bare.step(dt), ticks))  # noqa: B023
+                if python is not None:
+                    python_times.append(_in_python(python.step, ticks))
             full, plain = statistics.median(full_times), statistics.median(bare_times)
             fits[target].append((links, full, plain))
             ratio = full / plain
+            slow = f"{statistics.median(python_times) * 1e6:>9.0f}us" if python_times else " " * 11
             print(
                 f"   {links:>6} {target:<7}{full * 1e6:>9.0f}us{plain * 1e6:>9.0f}us{ratio:>7.1f}x"
-                f"   {_verdict(ratio, TICK_TARGETS.get(links), at_most=True)}"
+                f"{slow}   {_verdict(ratio, TICK_TARGETS.get(links), at_most=True)}"
             )
     if len(sizes) >= 2:
         for target, rows in fits.items():

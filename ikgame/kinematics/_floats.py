@@ -7,6 +7,7 @@ arithmetic, so they work on plain lists (px, radians).
 from __future__ import annotations
 
 import math
+from collections.abc import MutableSequence, Sequence
 
 import numpy as np
 
@@ -50,6 +51,36 @@ def float_point(point: object) -> tuple[float, float]:
     return x, y
 
 
+def forward(
+    lengths: Sequence[float],
+    angles: Sequence[float],
+    x: float,
+    y: float,
+    heading: float,
+    xs: MutableSequence[float],
+    ys: MutableSequence[float],
+) -> None:
+    """Forward kinematics of a chain from its base at (``x``, ``y``) px facing ``heading``
+    (radians), written into ``xs`` and ``ys``: every joint, then the end effector, px.
+
+    Lists or numpy arrays alike, so that the same code runs in Python and compiled
+    (:mod:`ikgame.kinematics._compiled`).
+
+    >>> xs, ys = [0.0] * 3, [0.0] * 3
+    >>> forward([1.0, 2.0], [0.0, 0.0], 5.0, 0.0, 0.0, xs, ys)
+    >>> xs
+    [5.0, 6.0, 8.0]
+    """
+    xs[0] = x
+    ys[0] = y
+    for i in range(len(lengths)):
+        heading += angles[i]
+        x += lengths[i] * math.cos(heading)
+        y += lengths[i] * math.sin(heading)
+        xs[i + 1] = x
+        ys[i + 1] = y
+
+
 class FloatChain:
     """A chain's lengths, limits and base as floats, with forward kinematics on lists."""
 
@@ -74,18 +105,9 @@ class FloatChain:
 
     def joints(self, angles: list[float]) -> tuple[list[float], list[float]]:
         """World x and y of every joint, then the end effector, px."""
-        x, y = self.base_x, self.base_y
-        xs = [x]
-        ys = [y]
-        heading = self.base_angle
-        cos, sin = math.cos, math.sin
-        # The running x and y stay in locals: this is the solvers' innermost loop.
-        for length, angle in zip(self.lengths, angles, strict=True):
-            heading += angle
-            x += length * cos(heading)
-            y += length * sin(heading)
-            xs.append(x)
-            ys.append(y)
+        xs = [0.0] * (len(self.lengths) + 1)
+        ys = [0.0] * (len(self.lengths) + 1)
+        forward(self.lengths, angles, self.base_x, self.base_y, self.base_angle, xs, ys)
         return xs, ys
 
     def error_sqr(self, angles: list[float], tx: float, ty: float) -> float:

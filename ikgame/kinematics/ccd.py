@@ -10,11 +10,13 @@ the article's constants for the degenerate case and for detecting that nothing m
 from __future__ import annotations
 
 import math
+from collections.abc import MutableSequence, Sequence
 from typing import Final
 
 import numpy as np
 
-from ikgame.kinematics._floats import FloatChain, float_angles, float_point
+from ikgame.kinematics._compiled import compiled_pass
+from ikgame.kinematics._floats import FloatChain, float_angles, float_point, forward
 from ikgame.kinematics.skeleton import Skeleton, check_angles, check_point
 from ikgame.kinematics.solver import Solution, SolveStatus
 
@@ -79,7 +81,9 @@ def _rotation_toward(
     else:
         cos_rot = (cur_to_end_x * cur_to_target_x + cur_to_end_y * cur_to_target_y) / end_target_mag
         sin_rot = (cur_to_end_x * cur_to_target_y - cur_to_end_y * cur_to_target_x) / end_target_mag
-    rot = math.acos(max(-1.0, min(1.0, cos_rot)))
+    # min and max written out (the same floats), so that this compiles as it is.
+    clipped = cos_rot if cos_rot < 1.0 else 1.0
+    rot = math.acos(clipped if clipped > -1.0 else -1.0)
     if sin_rot < 0.0:
         rot = -rot
     return cos_rot, sin_rot, rot, cur_to_end_mag
@@ -199,39 +203,93 @@ def _chain(skeleton: Skeleton) -> _Chain:
 
 
 class _Chain(FloatChain):
-    """A chain as floats, with the limit-aware CCD pass."""
+    """A chain as floats, with the limit-aware CCD pass (compiled for a long chain, when
+    :mod:`ikgame.kinematics._compiled` can)."""
+
+    def __init__(self, skeleton: Skeleton) -> None:
+        super().__init__(skeleton)
+        self._compiled = compiled_pass(self)
 
     def iterate(
         self, angles: list[float], tx: float, ty: float, arrival_dist_sqr: float
     ) -> tuple[SolveStatus, list[float]]:
         """One limit-aware pass; returns the status and the new angles."""
-        joint_x, joint_y = self.joints(angles)
+        if self._compiled is not None:
+            new, status = self._compiled(angles, tx, ty, arrival_dist_sqr)
+            return _STATUSES[status], new
+        joints = len(self.lengths) + 1
         new = list(angles)
-        end_x, end_y = joint_x[-1], joint_y[-1]
-        modified = False
-        for i in range(len(new) - 1, -1, -1):
-            jx, jy = joint_x[i], joint_y[i]
-            cos_rot, sin_rot, rot, cur_to_end_mag = _rotation_toward(jx, jy, end_x, end_y, tx, ty)
-            wanted = new[i] + rot
-            if self.free[i]:
-                new[i] = wrap_angle(wanted)
-            else:
-                clamped = min(max(wanted, self.lower[i]), self.upper[i])
-                if clamped != wanted:
-                    rot += clamped - wanted
-                    cos_rot, sin_rot = math.cos(rot), math.sin(rot)
-                new[i] = clamped
-            cur_to_end_x = end_x - jx
-            cur_to_end_y = end_y - jy
-            end_x = jx + cos_rot * cur_to_end_x - sin_rot * cur_to_end_y
-            end_y = jy + sin_rot * cur_to_end_x + cos_rot * cur_to_end_y
-            dx = tx - end_x
-            dy = ty - end_y
-            if dx * dx + dy * dy <= arrival_dist_sqr:
-                return SolveStatus.SUCCESS, new
-            if not modified and abs(rot) * cur_to_end_mag > TRIVIAL_ARC_LENGTH:
-                modified = True
-        return (SolveStatus.PROCESSING if modified else SolveStatus.FAILURE), new
+        status = _iterate(
+            self.lengths,
+            self.lower,
+            self.upper,
+            self.free,
+            self.base_x,
+            self.base_y,
+            self.base_angle,
+            new,
+            tx,
+            ty,
+            arrival_dist_sqr,
+            [0.0] * joints,
+            [0.0] * joints,
+        )
+        return _STATUSES[status], new
+
+
+_STATUSES: Final = (SolveStatus.SUCCESS, SolveStatus.PROCESSING, SolveStatus.FAILURE)
+""":func:`_iterate`'s status codes."""
+
+
+def _iterate(
+    lengths: Sequence[float],
+    lower: Sequence[float],
+    upper: Sequence[float],
+    free: Sequence[bool],
+    base_x: float,
+    base_y: float,
+    base_angle: float,
+    angles: MutableSequence[float],
+    tx: float,
+    ty: float,
+    arrival_dist_sqr: float,
+    joint_x: MutableSequence[float],
+    joint_y: MutableSequence[float],
+) -> int:
+    """One limit-aware CCD pass turning ``angles`` (radians) in place toward (tx, ty), px.
+
+    Returns an index into :data:`_STATUSES`. Lists or numpy arrays alike (``joint_x`` and
+    ``joint_y``, one longer than ``angles``, are its scratch space), so that the same code runs
+    in Python and compiled.
+    """
+    forward(lengths, angles, base_x, base_y, base_angle, joint_x, joint_y)
+    end_x, end_y = joint_x[-1], joint_y[-1]
+    modified = False
+    for i in range(len(angles) - 1, -1, -1):
+        jx, jy = joint_x[i], joint_y[i]
+        cos_rot, sin_rot, rot, cur_to_end_mag = _rotation_toward(jx, jy, end_x, end_y, tx, ty)
+        wanted = angles[i] + rot
+        if free[i]:
+            angles[i] = wrap_angle(wanted)
+        else:
+            # min(max(wanted, lower), upper), written out: the same floats.
+            clamped = lower[i] if lower[i] > wanted else wanted
+            clamped = upper[i] if upper[i] < clamped else clamped
+            if clamped != wanted:
+                rot += clamped - wanted
+                cos_rot, sin_rot = math.cos(rot), math.sin(rot)
+            angles[i] = clamped
+        cur_to_end_x = end_x - jx
+        cur_to_end_y = end_y - jy
+        end_x = jx + cos_rot * cur_to_end_x - sin_rot * cur_to_end_y
+        end_y = jy + sin_rot * cur_to_end_x + cos_rot * cur_to_end_y
+        dx = tx - end_x
+        dy = ty - end_y
+        if dx * dx + dy * dy <= arrival_dist_sqr:
+            return 0
+        if not modified and abs(rot) * cur_to_end_mag > TRIVIAL_ARC_LENGTH:
+            modified = True
+    return 1 if modified else 2
 
 
 def solve_ccd(

@@ -1,0 +1,124 @@
+"""A long chain's innermost solver loop compiled by numba, when it is installed (the ``fast``
+extra: ``python -m pip install 'ikgame[fast]'``).
+
+What is compiled is the Python code itself (:func:`ikgame.kinematics.ccd._iterate` and what it
+calls), not a second implementation: the same operations in the same order, no fast-math, so
+the same floats, and a run gives the same results with numba or without it (tests compare the
+two bit for bit). Only chains of :data:`COMPILED_LINKS` links or more use it: below that,
+crossing into compiled code costs about what it saves, and a short run does not pay numba's
+import (about half a second) or its compiling (a second or two, once per process, or once for
+good where numba can cache on disk beside the package). ``IKGAME_COMPILED=0`` in the environment
+turns it off.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+import os
+import warnings
+from collections.abc import Callable
+from types import ModuleType
+from typing import TYPE_CHECKING, Final
+
+import numpy as np
+
+if TYPE_CHECKING:
+    from ikgame.kinematics._floats import FloatChain
+
+__all__ = ["COMPILED_LINKS", "compiled_pass"]
+
+COMPILED_LINKS: Final = 32
+"""Chains of this many links or more run their CCD passes compiled, where numba is installed."""
+
+Pass = Callable[[list[float], float, float, float], tuple[list[float], int]]
+"""``(angles, tx, ty, arrival_dist_sqr) -> (new angles, status code)``, radians and px."""
+
+
+def compiled_pass(chain: FloatChain) -> Pass | None:
+    """``chain``'s CCD pass compiled, or None: a short chain, no numba, or turned off.
+
+    >>> from ikgame.kinematics import Skeleton
+    >>> from ikgame.kinematics._floats import FloatChain
+    >>> compiled_pass(FloatChain(Skeleton.chain([10.0, 10.0]))) is None  # too short to pay
+    True
+    """
+    if len(chain.lengths) < COMPILED_LINKS or os.environ.get("IKGAME_COMPILED") == "0":
+        return None
+    kernel = _kernel()
+    if kernel is None:
+        return None
+    lengths, lower, upper = (
+        np.array(v, dtype=float) for v in (chain.lengths, chain.lower, chain.upper)
+    )
+    free = np.array(chain.free, dtype=bool)
+    base_x, base_y, base_angle = chain.base_x, chain.base_y, chain.base_angle
+    joint_x, joint_y = np.empty(len(lengths) + 1), np.empty(len(lengths) + 1)
+
+    def run(
+        angles: list[float], tx: float, ty: float, arrival_dist_sqr: float
+    ) -> tuple[list[float], int]:
+        new = np.array(angles, dtype=float)
+        status = kernel(
+            lengths,
+            lower,
+            upper,
+            free,
+            base_x,
+            base_y,
+            base_angle,
+            new,
+            tx,
+            ty,
+            arrival_dist_sqr,
+            joint_x,
+            joint_y,
+        )
+        return new.tolist(), int(status)
+
+    return run
+
+
+@functools.cache
+def _kernel() -> Callable[..., int] | None:
+    """:func:`ikgame.kinematics.ccd._iterate` compiled, or None without numba (or where numba
+    cannot compile it: the Python pass then runs, with a warning)."""
+    try:
+        import numba
+    except ImportError:
+        return None
+    from ikgame.kinematics import ccd
+
+    try:
+        _teach(numba)
+        kernel = numba.njit(nogil=True)(ccd._iterate)
+        # Compiled now, on a one-link chain, so that a numba that cannot compile it is found
+        # here rather than in the middle of a solve.
+        one, scratch = np.ones(1), np.zeros(2)
+        free = np.ones(1, dtype=bool)
+        kernel(
+            one, -one, one, free, 0.0, 0.0, 0.0, np.zeros(1), 1.0, 0.0, 0.0, scratch, scratch.copy()
+        )
+    except Exception as exc:  # noqa: BLE001 - an optional speed-up must never stop a run
+        warnings.warn(
+            f"numba could not compile the CCD pass, which runs in Python: {exc}",
+            RuntimeWarning,
+            stacklevel=2,
+        )
+        return None
+    return kernel
+
+
+@functools.cache
+def _teach(numba: ModuleType) -> None:
+    """Tell ``numba`` (once) how to compile what the pass calls."""
+    from numba.extending import overload, register_jitable
+
+    from ikgame.kinematics import _floats, ccd
+
+    # numba compiles numpy's fmod but not math's; both are C's fmod, which is exact.
+    overload(math.fmod)(lambda x, y: lambda x, y: np.fmod(x, y))
+    # The helpers stay plain Python functions for Python callers; compiled code calls them
+    # compiled.
+    for helper in (_floats.forward, ccd._rotation_toward, ccd.wrap_angle):
+        register_jitable(helper)
