@@ -118,6 +118,10 @@ ROUTE_STEP: Final = 0.3
 AHEAD: Final = 40.0
 """A chain whose sweep to its via pose is at most this (px) may head for the next one."""
 
+LEAD: Final = 0.3
+"""Most a pose commanded on a route's piece leads the joint that has come least far along it,
+radians (on the joint that turns most over the piece)."""
+
 RELEASE_CALLS: Final = 120
 """Calls at rest on a clear goal after which the solver answers again even short of the target
 (half a second at 240 ticks/s)."""
@@ -900,6 +904,7 @@ class Avoider:
         self._target: tuple[float, ...] | None = None
         self._goal: np.ndarray | None = None
         self._way: list[np.ndarray] = []
+        self._origin: np.ndarray | None = None
         self._given_up: tuple[float, ...] | None = None
         self._tolerance: float | np.ndarray = 0.0
         self._resting = 0
@@ -1102,6 +1107,9 @@ class Avoider:
             self._unchecked = True
             return solution
         self._target, (self._goal, self._way, self._tolerance) = search.key, plan
+        # A route round an obstacle is followed piece by piece on its checked lines; a straight
+        # way to the goal is commanded whole.
+        self._origin = measured.copy() if len(self._way) > 1 else None
         moved = not np.array_equal(measured, search.start)
         if moved and not self._clear_way(measured, self._way[0]):
             # The chain went on (along an earlier plan, or drifting while it held) and the
@@ -1129,6 +1137,7 @@ class Avoider:
     def _drop(self) -> None:
         """Forget the plan and any search: the solver's answer is commanded as it is."""
         self._target, self._goal, self._way, self._search = None, None, [], None
+        self._origin = None
 
     def _arrived(self, measured: np.ndarray, target: np.ndarray | TargetSet) -> bool:
         """Whether the solver may answer again: the chain has rested on the clear goal (within
@@ -1196,22 +1205,45 @@ class Avoider:
         return bool(np.all(gaps - ahead >= 0.0))
 
     def _follow(self, measured: np.ndarray, solution: Solution) -> Solution:
-        """The via pose to head for: the next one once the chain, near the current one (within
+        """The pose to head for: the next via pose once the chain, near the current one (within
         ``AHEAD`` px of sweep), can turn to it in a clear straight line, or once it rests on the
         current one (within ``SETTLED``: each piece is clear from its start, and the chain is
-        there)."""
+        there). On a route round an obstacle, a pose on the piece's line at most ``LEAD``
+        radians ahead of the joint that has come the least far along it (see :meth:`_lead`)."""
         room = self.clearance
         way = self._way
         while len(way) > 1:
             near = room.swept(measured, way[0]) <= AHEAD
             if near and room.path_clear(measured, way[1]):
                 del way[0]
+                self._origin = None if self._origin is None else measured.copy()
             elif np.abs(measured - way[0]).max() <= SETTLED:
-                del way[0]
+                passed = way.pop(0)
+                self._origin = None if self._origin is None else passed
             else:
                 break
         status = SolveStatus.PROCESSING if len(way) > 1 else solution.status
-        return Solution(way[0], status, solution.iterations, solution.error)
+        pose = way[0] if self._origin is None else self._lead(measured, self._origin, way[0])
+        return Solution(pose, status, solution.iterations, solution.error)
+
+    @staticmethod
+    def _lead(measured: np.ndarray, origin: np.ndarray, via: np.ndarray) -> np.ndarray:
+        """The pose on the line from ``origin`` to ``via`` at most ``LEAD`` radians (on the
+        joint that turns most) ahead of how far along it the laggard of the joints has come.
+
+        The motors do not keep to a line: the outer joints, turning less mass, speed up sooner
+        than the inner ones, and a chain sent straight to a far via pose leads with its last
+        links, which can press them into the obstacle the line kept clear of. Held to a pose
+        just ahead of the slowest joint, the others wait for it, and the chain keeps near the
+        line it was checked along."""
+        span = via - origin
+        largest = float(np.abs(span).max())
+        if largest <= LEAD:
+            return via
+        turning = np.abs(span) > 0.1 * largest
+        along = float(np.min((measured - origin)[turning] / span[turning]))
+        ahead = max(along, 0.0) + LEAD / largest
+        return via if ahead >= 1.0 else origin + ahead * span
 
 
 _Plan = tuple[np.ndarray, list[np.ndarray], float | np.ndarray]

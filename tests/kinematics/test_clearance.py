@@ -6,6 +6,7 @@ import pytest
 from ikgame.kinematics import Skeleton, Solution, SolveStatus, TargetSet, forward_kinematics
 from ikgame.kinematics.clearance import (
     ITERATION_UNITS,
+    LEAD,
     SEARCH_BUDGET,
     Avoider,
     Clearance,
@@ -284,6 +285,23 @@ def test_a_chain_hooked_round_a_shelfs_end_gets_a_way_in_under_it_within_half_a_
     arrived = _move_as_told(guide, hooked, through, target, 600)
     assert room.is_clear(arrived)
     assert room.misses(arrived, target)[0] <= 0.5
+
+
+def test_on_a_route_the_chain_is_sent_along_its_line_just_ahead_of_its_slowest_joint():
+    room = _shelf_room()
+    guide = Avoider(room)
+    start = np.array([0.5, 0.3, 0.2])  # up-left, the way in under the shelf not straight
+    target = np.array([290.0, 45.0])
+    through = Solution(np.array([-0.3, -1.2, -0.6]), SolveStatus.SUCCESS, 10, 0.0)
+    lead = _settle(guide, start, through, target)[-1].angles - start
+    # Not the first via pose, a far swing away, but LEAD along the line toward it.
+    assert np.abs(lead).max() == pytest.approx(LEAD)
+    # The outer joints ran on twice as far as the first (they turn less mass): the command is
+    # one lead ahead of the first, the laggard, on the same line, and holds the others back.
+    ahead = start + lead * np.array([1.0, 2.0, 2.0])
+    command = guide.steer(ahead, through, target, 0.5).angles
+    assert np.allclose(command, start + 2.0 * lead)
+    assert room.path_clear(ahead, command)
 
 
 def test_route_is_none_when_the_limits_leave_no_way_round():
