@@ -674,6 +674,48 @@ class Clearance:
             way.append(here)
         return way
 
+    def _trimming(
+        self,
+        start: np.ndarray,
+        way: list[np.ndarray],
+        target: np.ndarray | TargetSet,
+        tolerance: float,
+    ) -> _Work[list[np.ndarray]]:
+        """A route ``way`` from ``start`` cut where the targeted ends come nearest ``target``
+        on its pieces before the last, when that is nearer than they are at the last via pose:
+        the via poses before the cut, the cut, then a clear answer polished from the cut
+        (within ``tolerance``) when the line to it is clear, else the goal when the line to it
+        is; the route as it was when neither is.
+
+        The search knows poses, not where they put the ends: a via pose can lie past the
+        target, and a chain following the route takes its end past the target and back (10%
+        of the approach on two stress levels). The answer polished from where the end passes
+        nearest is a short turn away; the goal can be a long one."""
+        if len(way) < 2:
+            return way
+        poses = [start, *way[:-1]]
+        pieces = [self._samples(a, b) for a, b in zip(poses, poses[1:], strict=False)]
+        samples = np.concatenate(pieces)
+        yield CHECK_UNITS + len(samples) * self._pose_units
+        links, points, scale = self._aim(target)
+        _, ends = self._links(self.points(samples))
+        misses = (scale**2 * ((points - ends[:, links]) ** 2).sum(axis=-1)).sum(axis=-1)
+        nearest = int(np.argmin(misses))
+        if misses[nearest] >= misses[-1]:
+            return way
+        cut = samples[nearest]
+        # The via poses the chain passes before the cut.
+        passed = way[: int(np.searchsorted(np.cumsum([len(p) for p in pieces]), nearest, "right"))]
+        near = yield from self._polishing(cut, target, POLISH_ITERATIONS, tolerance, True)
+        if near.status is SolveStatus.SUCCESS and (yield from self._checking(cut, near.angles)):
+            return [*passed, cut, near.angles]
+        # Checked from the goal, as the route's tree from the goal checks its pieces: a goal
+        # polished to within the margin (a target just above the floor) may be approached as
+        # near as it is.
+        if (yield from self._checking(way[-1], cut)):
+            return [*passed, cut, way[-1]]
+        return way
+
     def _connect(self, start: np.ndarray, goal: np.ndarray) -> _Work[list[np.ndarray] | None]:
         """RRT-connect in joint space: the poses from ``start`` (excluded) to ``goal``.
 
@@ -1064,7 +1106,7 @@ class Avoider:
         room = self.clearance
         start = np.array(start, dtype=float)
         if goal is not None:
-            plan = yield from self._rerouting(start, goal, tolerance)
+            plan = yield from self._rerouting(start, goal, tolerance, target)
             if plan is not None:
                 return plan
             # The solver's clear answer can lie where no clear way leads (a fold the joint
@@ -1080,14 +1122,26 @@ class Avoider:
         if straight:
             # The straight way to it was just checked clear: the route is that line.
             return goal, [goal], arrival
-        return (yield from self._rerouting(start, goal, arrival))
+        return (yield from self._rerouting(start, goal, arrival, target))
 
     def _rerouting(
-        self, start: np.ndarray, goal: np.ndarray, tolerance: float | np.ndarray
+        self,
+        start: np.ndarray,
+        goal: np.ndarray,
+        tolerance: float | np.ndarray,
+        target: np.ndarray | TargetSet | None = None,
     ) -> _Work[_Plan | None]:
-        """The search for a route from ``start`` to ``goal``: the plan, or None."""
-        way = yield from self.clearance._routing(np.array(start, dtype=float), goal)
-        return None if way is None else (goal, way, tolerance)
+        """The search for a route from ``start`` to ``goal``: the plan, or None. With the
+        ``target``, a route that takes the targeted ends past it and back is cut where they
+        come nearest (see :meth:`Clearance._trimming`)."""
+        start = np.array(start, dtype=float)
+        room = self.clearance
+        way = yield from room._routing(start, goal)
+        if way is None:
+            return None
+        if target is not None:
+            way = yield from room._trimming(start, way, target, float(np.min(tolerance)))
+        return way[-1], way, tolerance
 
     def _advance(self, search: _Search, measured: np.ndarray, solution: Solution) -> Solution:
         """Do this call's share of the search; once it is done, take up its plan."""
