@@ -26,13 +26,15 @@ width). A chain aims its end effector at a point; a tree aims a
   is steered through these via poses one after the other. A chain's two trees first grow along
   the poses its polish steps through drawing the end from each tree's root toward a point out
   in the open (the retreat), and a tree's piece whose links' gaps at its two ends outweigh how
-  far the links can sweep between them is clear without sampling.
+  far the links can sweep between them is clear without sampling. A route that takes the
+  targeted ends past the target and back is cut where they come nearest it.
 
 :class:`Avoider` does this tick by tick for a controller: it takes the solver's answer and
 returns the pose to command, keeping the clear answer and the route for the target until it
 moves, so they are searched once, and spreading each search over ticks by a budget of counted
 work (``SEARCH_BUDGET``) so that no tick carries a whole one; a chain at rest or in the open
-costs two products of the links' levers a tick.
+costs two products of the links' levers a tick. A route of several pieces is followed on its
+lines, each pose commanded at most ``LEAD`` ahead of the joint that has come least far.
 While the base moves it plans nothing (a plan would be stale by the next tick): it only holds
 off an obstacle the links the solver's answers bring nearer it, polishing the pose it commanded
 onto the target for where the base is now. An answer arrives when every targeted end is within
@@ -58,6 +60,7 @@ __all__ = [
     "MARGIN",
     "PATH_STEP",
     "ROUTE_NODES",
+    "LEAD",
     "RANDOM_SEEDS",
     "RANDOM_POOL",
     "CHECK_UNITS",

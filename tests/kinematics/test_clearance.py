@@ -11,6 +11,7 @@ from ikgame.kinematics.clearance import (
     Avoider,
     Clearance,
     Obstacles,
+    _finish,
 )
 
 UP = math.pi / 2
@@ -302,6 +303,23 @@ def test_on_a_route_the_chain_is_sent_along_its_line_just_ahead_of_its_slowest_j
     command = guide.steer(ahead, through, target, 0.5).angles
     assert np.allclose(command, start + 2.0 * lead)
     assert room.path_clear(ahead, command)
+
+
+def test_a_route_past_the_target_and_back_is_cut_where_the_end_passes_nearest():
+    arm = Skeleton.chain([100.0, 100.0], base_angle=UP)
+    far = Obstacles.from_arrays(NO_SEGMENTS, np.array([[1000.0, 1000.0, 10.0]]))
+    room = Clearance(arm, np.full(2, 5.0), far)
+    target = np.array([0.0, 200.0])  # the arm straight up
+    start, past = np.array([0.6, 0.0]), np.array([-0.6, 0.0])
+    goal = np.array([0.05, -0.1])  # another pose reaching the target
+    way = _finish(room._trimming(start, [past, goal], target, 0.5))
+    # The arm swings through the target on its way to ``past``: it stops there instead.
+    assert len(way) == 2 and not any(np.array_equal(pose, past) for pose in way)
+    assert np.abs(way[0] - np.zeros(2)).max() < 0.02  # on the first piece, nearest the target
+    assert room.misses(way[1], target)[0] <= 0.5
+    assert room.path_clear(start, way[0]) and room.path_clear(way[0], way[1])
+    # A route whose end comes nearest at its last piece is left as it is.
+    assert _finish(room._trimming(start, [goal, past], target, 0.5)) == [goal, past]
 
 
 def test_route_is_none_when_the_limits_leave_no_way_round():
