@@ -33,9 +33,8 @@ width). A chain aims its end effector at a point; a tree aims a
 returns the pose to command, keeping the clear answer and the route for the target until it
 moves, so they are searched once, and spreading each search over ticks by a budget of counted
 work (``SEARCH_BUDGET``) so that no tick carries a whole one; a chain at rest or in the open
-costs two products of the links' levers a tick. The last piece of a route of several is
-followed on its line, each pose commanded at most ``LEAD`` ahead of the joint that has come
-least far.
+costs two products of the links' levers a tick. A route of several pieces is followed on its
+lines, each pose commanded at most ``LEAD`` ahead of the joint that has come least far.
 While the base moves it plans nothing (a plan would be stale by the next tick): it only holds
 off an obstacle the links the solver's answers bring nearer it, polishing the pose it commanded
 onto the target for where the base is now. An answer arrives when every targeted end is within
@@ -123,8 +122,8 @@ AHEAD: Final = 40.0
 """A chain whose sweep to its via pose is at most this (px) may head for the next one."""
 
 LEAD: Final = 0.3
-"""Most a pose commanded on a route's last piece leads the joint that has come least far along
-it, radians (on the joint that turns most over the piece)."""
+"""Most a pose commanded on a route's piece leads the joint that has come least far along it,
+radians (on the joint that turns most over the piece)."""
 
 RELEASE_CALLS: Final = 120
 """Calls at rest on a clear goal after which the solver answers again even short of the target
@@ -1266,9 +1265,8 @@ class Avoider:
         """The pose to head for: the next via pose once the chain, near the current one (within
         ``AHEAD`` px of sweep), can turn to it in a clear straight line, or once it rests on the
         current one (within ``SETTLED``: each piece is clear from its start, and the chain is
-        there). On the last piece of a route round an obstacle, a pose on its line at most
-        ``LEAD`` radians ahead of the joint that has come the least far along it (see
-        :meth:`_lead`)."""
+        there). On a route round an obstacle, a pose on the piece's line at most ``LEAD``
+        radians ahead of the joint that has come the least far along it (see :meth:`_lead`)."""
         room = self.clearance
         way = self._way
         while len(way) > 1:
@@ -1282,11 +1280,7 @@ class Avoider:
             else:
                 break
         status = SolveStatus.PROCESSING if len(way) > 1 else solution.status
-        # Into the goal, where the chain comes to rest, a route is followed on its line; its via
-        # poses are passed on the way (within ``AHEAD``), at the motors' own pace: held to its
-        # lines all along, a route of seven pieces took 3.9 s.
-        last = self._origin is not None and len(way) == 1
-        pose = self._lead(measured, self._origin, way[0]) if last else way[0]
+        pose = way[0] if self._origin is None else self._lead(measured, self._origin, way[0])
         return Solution(pose, status, solution.iterations, solution.error)
 
     @staticmethod

@@ -288,16 +288,21 @@ def test_a_chain_hooked_round_a_shelfs_end_gets_a_way_in_under_it_within_half_a_
     assert room.misses(arrived, target)[0] <= 0.5
 
 
-def test_into_its_goal_a_route_is_followed_just_ahead_of_its_slowest_joint():
-    origin, goal = np.zeros(3), np.array([2.0, -1.0, 0.5])
-    # The outer joints (less mass beyond them) ran on three times as far as the first: the
-    # pose commanded is on the line, LEAD (on the joint that turns most) ahead of the first.
-    measured = origin + np.array([0.1, 0.3, 0.3]) * (goal - origin)
-    command = Avoider._lead(measured, origin, goal)
-    assert np.allclose(command, origin + (0.1 + LEAD / 2.0) * (goal - origin))
-    # Within LEAD of the end, the goal itself.
-    assert np.array_equal(Avoider._lead(origin + 0.9 * (goal - origin), origin, goal), goal)
-    assert np.array_equal(Avoider._lead(origin, origin, origin + LEAD / 2.0), origin + LEAD / 2.0)
+def test_on_a_route_the_chain_is_sent_along_its_line_just_ahead_of_its_slowest_joint():
+    room = _shelf_room()
+    guide = Avoider(room)
+    start = np.array([0.5, 0.3, 0.2])  # up-left, the way in under the shelf not straight
+    target = np.array([290.0, 45.0])
+    through = Solution(np.array([-0.3, -1.2, -0.6]), SolveStatus.SUCCESS, 10, 0.0)
+    lead = _settle(guide, start, through, target)[-1].angles - start
+    # Not the first via pose, a far swing away, but LEAD along the line toward it.
+    assert np.abs(lead).max() == pytest.approx(LEAD)
+    # The outer joints ran on twice as far as the first (they turn less mass): the command is
+    # one lead ahead of the first, the laggard, on the same line, and holds the others back.
+    ahead = start + lead * np.array([1.0, 2.0, 2.0])
+    command = guide.steer(ahead, through, target, 0.5).angles
+    assert np.allclose(command, start + 2.0 * lead)
+    assert room.path_clear(ahead, command)
 
 
 def test_a_route_past_the_target_and_back_is_cut_where_the_end_passes_nearest():
