@@ -23,13 +23,18 @@ width). A chain aims its end effector at a point; a tree aims a
   through an obstacle (checked at poses no point of the chain moves more than ``PATH_STEP``
   between), a bidirectional random tree in joint space (RRT-connect, seeded, at most
   ``ROUTE_NODES`` nodes) finds a chain of clear straight pieces, shortened greedily; the chain
-  is steered through these via poses one after the other.
+  is steered through these via poses one after the other. A chain's two trees first grow along
+  the poses its polish steps through drawing the end from each tree's root toward a point out
+  in the open (the retreat), and a tree's piece whose links' gaps at its two ends outweigh how
+  far the links can sweep between them is clear without sampling. A route that takes the
+  targeted ends past the target and back is cut where they come nearest it.
 
 :class:`Avoider` does this tick by tick for a controller: it takes the solver's answer and
 returns the pose to command, keeping the clear answer and the route for the target until it
 moves, so they are searched once, and spreading each search over ticks by a budget of counted
 work (``SEARCH_BUDGET``) so that no tick carries a whole one; a chain at rest or in the open
-costs two products of the links' levers a tick.
+costs two products of the links' levers a tick. A route of several pieces is followed on its
+lines, each pose commanded at most ``LEAD`` ahead of the joint that has come least far.
 While the base moves it plans nothing (a plan would be stale by the next tick): it only holds
 off an obstacle the links the solver's answers bring nearer it, polishing the pose it commanded
 onto the target for where the base is now. An answer arrives when every targeted end is within
@@ -55,6 +60,7 @@ __all__ = [
     "MARGIN",
     "PATH_STEP",
     "ROUTE_NODES",
+    "LEAD",
     "RANDOM_SEEDS",
     "RANDOM_POOL",
     "CHECK_UNITS",
@@ -115,6 +121,10 @@ ROUTE_STEP: Final = 0.3
 AHEAD: Final = 40.0
 """A chain whose sweep to its via pose is at most this (px) may head for the next one."""
 
+LEAD: Final = 0.3
+"""Most a pose commanded on a route's piece leads the joint that has come least far along it,
+radians (on the joint that turns most over the piece)."""
+
 RELEASE_CALLS: Final = 120
 """Calls at rest on a clear goal after which the solver answers again even short of the target
 (half a second at 240 ticks/s)."""
@@ -132,6 +142,9 @@ for ``POSE_UNITS`` per link and obstacle."""
 
 POSE_UNITS: Final = 0.05
 """Units of search work a pose checked along a path counts for per link and obstacle."""
+
+NEAREST_UNITS: Final = 0.002
+"""Units of search work finding a route tree's nearest pose counts for per pose of the tree."""
 
 PATH_CHUNK: Final = 100
 """Poses a path check measures in one step of a search."""
@@ -407,8 +420,10 @@ class Clearance:
         iterations: int,
         tolerance: float,
         avoid: bool,
+        trail: list[np.ndarray] | None = None,
     ) -> _Work[Solution]:
-        """:meth:`polish`, an iteration (``ITERATION_UNITS`` of work) a step."""
+        """:meth:`polish`, an iteration (``ITERATION_UNITS`` of work) a step; with ``trail``,
+        each clear pose it steps through is appended to it."""
         sk = self.skeleton
         pose = sk.clamp(np.asarray(angles, dtype=float).copy())
         links, points, scale = self._aim(target)
@@ -436,6 +451,8 @@ class Clearance:
             else:
                 dist = math.sqrt(float(weights @ misses**2 / weights.sum()))
             key = (max(0.0, -float(gap.min(initial=math.inf))), dist)
+            if trail is not None and key[0] == 0.0:
+                trail.append(pose.copy())
             if key < best_key:
                 best, best_key, best_misses, stale = pose.copy(), key, misses, 0
             else:
@@ -660,50 +677,194 @@ class Clearance:
             way.append(here)
         return way
 
+    def _trimming(
+        self,
+        start: np.ndarray,
+        way: list[np.ndarray],
+        target: np.ndarray | TargetSet,
+        tolerance: float,
+    ) -> _Work[list[np.ndarray]]:
+        """A route ``way`` from ``start`` cut where the targeted ends come nearest ``target``
+        on its pieces before the last, when that is nearer than they are at the last via pose:
+        the via poses before the cut, the cut, then a clear answer polished from the cut
+        (within ``tolerance``) when the line to it is clear, else the goal when the line to it
+        is; the route as it was when neither is.
+
+        The search knows poses, not where they put the ends: a via pose can lie past the
+        target, and a chain following the route takes its end past the target and back (10%
+        of the approach on two stress levels). The answer polished from where the end passes
+        nearest is a short turn away; the goal can be a long one."""
+        if len(way) < 2:
+            return way
+        poses = [start, *way[:-1]]
+        pieces = [self._samples(a, b) for a, b in zip(poses, poses[1:], strict=False)]
+        samples = np.concatenate(pieces)
+        yield CHECK_UNITS + len(samples) * self._pose_units
+        links, points, scale = self._aim(target)
+        _, ends = self._links(self.points(samples))
+        misses = (scale**2 * ((points - ends[:, links]) ** 2).sum(axis=-1)).sum(axis=-1)
+        nearest = int(np.argmin(misses))
+        if misses[nearest] >= misses[-1]:
+            return way
+        cut = samples[nearest]
+        # The via poses the chain passes before the cut.
+        passed = way[: int(np.searchsorted(np.cumsum([len(p) for p in pieces]), nearest, "right"))]
+        near = yield from self._polishing(cut, target, POLISH_ITERATIONS, tolerance, True)
+        if near.status is SolveStatus.SUCCESS and (yield from self._checking(cut, near.angles)):
+            return [*passed, cut, near.angles]
+        # Checked from the goal, as the route's tree from the goal checks its pieces: a goal
+        # polished to within the margin (a target just above the floor) may be approached as
+        # near as it is.
+        if (yield from self._checking(way[-1], cut)):
+            return [*passed, cut, way[-1]]
+        return way
+
     def _connect(self, start: np.ndarray, goal: np.ndarray) -> _Work[list[np.ndarray] | None]:
-        """RRT-connect in joint space: the poses from ``start`` (excluded) to ``goal``."""
+        """RRT-connect in joint space: the poses from ``start`` (excluded) to ``goal``.
+
+        A chain's two trees first grow along the ways its polish draws the end from each root
+        toward the retreat point (:meth:`_retreating`), and the goal's tree reaches for the end of
+        the start's before any pose is drawn at random."""
         sk = self.skeleton
         rng = np.random.default_rng(RANDOM_SEED)
         low = np.maximum(sk.lower, start - math.pi)
         high = np.minimum(sk.upper, start + math.pi)
-        trees: list[tuple[list[np.ndarray], list[int]]] = [([start], [-1]), ([goal], [-1])]
-        from_start = trees[0]
+        ends = self._link_gaps(np.stack((start, goal)))
+        yield CHECK_UNITS + 2 * self._pose_units
+        trees = [_Tree(start, ends[0]), _Tree(goal, ends[1])]
+        from_start, from_goal = trees
+        if sk.is_chain:
+            out = yield from self._retreating(from_start)
+            yield from self._retreating(from_goal)
+            reached, arrived = yield from self._extend(from_goal, from_start.poses[out], reach=True)
+            if arrived:
+                return (from_start.lineage(out) + from_goal.lineage(reached)[::-1])[1:]
         for _ in range(ROUTE_NODES):
             grow, other = trees
             sample = rng.uniform(low, high)
             new, _ = yield from self._extend(grow, sample, reach=True)
             if new is not None:
-                reached, arrived = yield from self._extend(other, grow[0][new], reach=True)
+                reached, arrived = yield from self._extend(other, grow.poses[new], reach=True)
                 if arrived:
-                    a = _lineage(grow, new)
-                    b = _lineage(other, reached)
+                    a = grow.lineage(new)
+                    b = other.lineage(reached)
                     path = a + b[::-1] if grow is from_start else b + a[::-1]
                     return path[1:]
             trees.reverse()
         return None
 
+    def _retreating(self, tree: _Tree) -> _Work[int]:
+        """Grow a chain's ``tree`` from its root along the poses its polish steps through
+        drawing the end toward the retreat point (half the chain's reach out along the base's
+        mount, where a chain stands folded clear of what is around its base), as far as each
+        is reached from the last in a clear straight line: the index of the last node added
+        (the root's when none).
+
+        A chain threaded under a shelf comes out along its own clearance rows, a way random
+        poses almost never fall on."""
+        sk = self.skeleton
+        mount = np.array([math.cos(sk.base_angle), math.sin(sk.base_angle)])
+        point = np.asarray(sk.base, dtype=float) + 0.5 * sk.reach * mount
+        trail: list[np.ndarray] = []
+        yield from self._polishing(tree.poses[0], point, POLISH_ITERATIONS, 0.5, True, trail)
+        last = 0
+        for pose in trail[1:]:
+            new, arrived = yield from self._extend(tree, pose, reach=True)
+            if arrived:
+                last = new
+        return last
+
     def _extend(
-        self, tree: tuple[list[np.ndarray], list[int]], toward: np.ndarray, *, reach: bool = False
+        self, tree: _Tree, toward: np.ndarray, *, reach: bool = False
     ) -> _Work[tuple[int | None, bool]]:
         """Grow ``tree`` from its nearest node toward a pose, ``ROUTE_STEP`` at a time (once,
         or with ``reach`` until it gets there or is blocked): the index of the last node added
         (None if none) and whether it is the pose itself."""
-        nodes, parents = tree
-        near = int(np.argmin(np.abs(np.asarray(nodes) - toward).max(axis=1)))
+        near = tree.nearest(toward)
+        yield tree.size * NEAREST_UNITS
         added = None
         while True:
-            here = nodes[near]
+            here = tree.poses[near]
             gap = toward - here
             largest = float(np.abs(gap).max())
             arrived = largest <= ROUTE_STEP
             nxt = toward if arrived else here + gap * (ROUTE_STEP / largest)
-            if not (yield from self._checking(here, nxt)):
+            gaps = yield from self._stepping(here, tree.gaps[near], nxt)
+            if gaps is None:
                 return added, False
-            nodes.append(nxt)
-            parents.append(near)
-            near = added = len(nodes) - 1
+            near = added = tree.add(nxt, gaps, near)
             if arrived or not reach:
                 return added, arrived
+
+    def _link_gaps(self, poses: np.ndarray) -> np.ndarray:
+        """(b, n) each link's smallest gap to any obstacle at each of (b, n) poses, px."""
+        return self._gaps(self.points(poses)).min(axis=-1)
+
+    def _stepping(
+        self, here: np.ndarray, gaps: np.ndarray, to: np.ndarray
+    ) -> _Work[np.ndarray | None]:
+        """Whether the straight line from ``here`` (its links' gaps ``gaps``) to ``to`` is clear
+        by :meth:`path_clear`'s measure: the links' gaps at ``to``, or None.
+
+        A link whose gaps at the two ends add up to more than it can sweep between them, and
+        twice the least gap allowed, cannot come that near in between (its gap shrinks at most
+        as fast as its points move): a piece in the open costs one pose. The line is sampled
+        only as finely as the other links move."""
+        ahead = self._link_gaps(to[None])[0]
+        yield CHECK_UNITS + self._pose_units
+        bar = _least_gap(self.margin / 2.0, float(gaps.min()))
+        if ahead.min() < bar:
+            return None
+        sweeps = self.swept_links(here, to)
+        # Only a gap kept above zero bounds the way: a link overlapping an obstacle at the
+        # start (a negative bar) could pass through it in between.
+        open_ = (gaps + ahead - sweeps >= 2.0 * bar) & (bar > 0.0)
+        if np.all(open_):
+            return ahead
+        swept = float(sweeps[~open_].max())
+        count = min(_MAX_SAMPLES, max(2, math.ceil(swept / PATH_STEP) + 1))
+        poses = here + np.linspace(0.0, 1.0, count)[1:-1, None] * (to - here)
+        for first in range(0, len(poses), PATH_CHUNK):
+            chunk = self.smallest_gaps(poses[first : first + PATH_CHUNK])
+            yield CHECK_UNITS + len(chunk) * self._pose_units
+            if not np.all(chunk >= bar):
+                return None
+        return ahead
+
+
+class _Tree:
+    """A route search's tree in joint space: its poses (rows; the root first), each link's gap
+    (px) at each, and each pose's parent (-1 for the root)."""
+
+    def __init__(self, root: np.ndarray, gaps: np.ndarray) -> None:
+        self.poses = np.empty((64, len(root)))
+        self.gaps = np.empty((64, len(gaps)))
+        self.parents: list[int] = []
+        self.size = 0
+        self.add(root, gaps, -1)
+
+    def add(self, pose: np.ndarray, gaps: np.ndarray, parent: int) -> int:
+        """Add a pose reached from ``parent`` in a clear straight line: its index."""
+        if self.size == len(self.poses):
+            self.poses = np.concatenate((self.poses, np.empty_like(self.poses)))
+            self.gaps = np.concatenate((self.gaps, np.empty_like(self.gaps)))
+        self.poses[self.size] = pose
+        self.gaps[self.size] = gaps
+        self.parents.append(parent)
+        self.size += 1
+        return self.size - 1
+
+    def nearest(self, pose: np.ndarray) -> int:
+        """The index of the pose nearest ``pose`` (the largest joint difference)."""
+        return int(np.argmin(np.abs(self.poses[: self.size] - pose).max(axis=1)))
+
+    def lineage(self, index: int) -> list[np.ndarray]:
+        """The poses from the root to ``index``."""
+        path = []
+        while index >= 0:
+            path.append(self.poses[index].copy())
+            index = self.parents[index]
+        return path[::-1]
 
 
 class Avoider:
@@ -788,6 +949,7 @@ class Avoider:
         self._target: tuple[float, ...] | None = None
         self._goal: np.ndarray | None = None
         self._way: list[np.ndarray] = []
+        self._origin: np.ndarray | None = None
         self._given_up: tuple[float, ...] | None = None
         self._tolerance: float | np.ndarray = 0.0
         self._resting = 0
@@ -947,7 +1109,7 @@ class Avoider:
         room = self.clearance
         start = np.array(start, dtype=float)
         if goal is not None:
-            plan = yield from self._rerouting(start, goal, tolerance)
+            plan = yield from self._rerouting(start, goal, tolerance, target)
             if plan is not None:
                 return plan
             # The solver's clear answer can lie where no clear way leads (a fold the joint
@@ -963,14 +1125,26 @@ class Avoider:
         if straight:
             # The straight way to it was just checked clear: the route is that line.
             return goal, [goal], arrival
-        return (yield from self._rerouting(start, goal, arrival))
+        return (yield from self._rerouting(start, goal, arrival, target))
 
     def _rerouting(
-        self, start: np.ndarray, goal: np.ndarray, tolerance: float | np.ndarray
+        self,
+        start: np.ndarray,
+        goal: np.ndarray,
+        tolerance: float | np.ndarray,
+        target: np.ndarray | TargetSet | None = None,
     ) -> _Work[_Plan | None]:
-        """The search for a route from ``start`` to ``goal``: the plan, or None."""
-        way = yield from self.clearance._routing(np.array(start, dtype=float), goal)
-        return None if way is None else (goal, way, tolerance)
+        """The search for a route from ``start`` to ``goal``: the plan, or None. With the
+        ``target``, a route that takes the targeted ends past it and back is cut where they
+        come nearest (see :meth:`Clearance._trimming`)."""
+        start = np.array(start, dtype=float)
+        room = self.clearance
+        way = yield from room._routing(start, goal)
+        if way is None:
+            return None
+        if target is not None:
+            way = yield from room._trimming(start, way, target, float(np.min(tolerance)))
+        return way[-1], way, tolerance
 
     def _advance(self, search: _Search, measured: np.ndarray, solution: Solution) -> Solution:
         """Do this call's share of the search; once it is done, take up its plan."""
@@ -990,6 +1164,9 @@ class Avoider:
             self._unchecked = True
             return solution
         self._target, (self._goal, self._way, self._tolerance) = search.key, plan
+        # A route round an obstacle is followed piece by piece on its checked lines; a straight
+        # way to the goal is commanded whole.
+        self._origin = measured.copy() if len(self._way) > 1 else None
         moved = not np.array_equal(measured, search.start)
         if moved and not self._clear_way(measured, self._way[0]):
             # The chain went on (along an earlier plan, or drifting while it held) and the
@@ -1017,6 +1194,7 @@ class Avoider:
     def _drop(self) -> None:
         """Forget the plan and any search: the solver's answer is commanded as it is."""
         self._target, self._goal, self._way, self._search = None, None, [], None
+        self._origin = None
 
     def _arrived(self, measured: np.ndarray, target: np.ndarray | TargetSet) -> bool:
         """Whether the solver may answer again: the chain has rested on the clear goal (within
@@ -1084,22 +1262,45 @@ class Avoider:
         return bool(np.all(gaps - ahead >= 0.0))
 
     def _follow(self, measured: np.ndarray, solution: Solution) -> Solution:
-        """The via pose to head for: the next one once the chain, near the current one (within
+        """The pose to head for: the next via pose once the chain, near the current one (within
         ``AHEAD`` px of sweep), can turn to it in a clear straight line, or once it rests on the
         current one (within ``SETTLED``: each piece is clear from its start, and the chain is
-        there)."""
+        there). On a route round an obstacle, a pose on the piece's line at most ``LEAD``
+        radians ahead of the joint that has come the least far along it (see :meth:`_lead`)."""
         room = self.clearance
         way = self._way
         while len(way) > 1:
             near = room.swept(measured, way[0]) <= AHEAD
             if near and room.path_clear(measured, way[1]):
                 del way[0]
+                self._origin = None if self._origin is None else measured.copy()
             elif np.abs(measured - way[0]).max() <= SETTLED:
-                del way[0]
+                passed = way.pop(0)
+                self._origin = None if self._origin is None else passed
             else:
                 break
         status = SolveStatus.PROCESSING if len(way) > 1 else solution.status
-        return Solution(way[0], status, solution.iterations, solution.error)
+        pose = way[0] if self._origin is None else self._lead(measured, self._origin, way[0])
+        return Solution(pose, status, solution.iterations, solution.error)
+
+    @staticmethod
+    def _lead(measured: np.ndarray, origin: np.ndarray, via: np.ndarray) -> np.ndarray:
+        """The pose on the line from ``origin`` to ``via`` at most ``LEAD`` radians (on the
+        joint that turns most) ahead of how far along it the laggard of the joints has come.
+
+        The motors do not keep to a line: the outer joints, turning less mass, speed up sooner
+        than the inner ones, and a chain sent straight to a far via pose leads with its last
+        links, which can press them into the obstacle the line kept clear of. Held to a pose
+        just ahead of the slowest joint, the others wait for it, and the chain keeps near the
+        line it was checked along."""
+        span = via - origin
+        largest = float(np.abs(span).max())
+        if largest <= LEAD:
+            return via
+        turning = np.abs(span) > 0.1 * largest
+        along = float(np.min((measured - origin)[turning] / span[turning]))
+        ahead = max(along, 0.0) + LEAD / largest
+        return via if ahead >= 1.0 else origin + ahead * span
 
 
 _Plan = tuple[np.ndarray, list[np.ndarray], float | np.ndarray]
@@ -1162,13 +1363,3 @@ def _crossing(p0: np.ndarray, p1: np.ndarray, q0: np.ndarray, q1: np.ndarray) ->
         t = (qp[..., 0] * s[..., 1] - qp[..., 1] * s[..., 0]) / cross
         u = (qp[..., 0] * r[..., 1] - qp[..., 1] * r[..., 0]) / cross
     return (cross != 0) & (t > 0) & (t < 1) & (u > 0) & (u < 1)
-
-
-def _lineage(tree: tuple[list[np.ndarray], list[int]], index: int) -> list[np.ndarray]:
-    """The poses from a tree's root to node ``index``."""
-    nodes, parents = tree
-    path = []
-    while index >= 0:
-        path.append(nodes[index])
-        index = parents[index]
-    return path[::-1]

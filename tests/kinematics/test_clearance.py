@@ -6,10 +6,12 @@ import pytest
 from ikgame.kinematics import Skeleton, Solution, SolveStatus, TargetSet, forward_kinematics
 from ikgame.kinematics.clearance import (
     ITERATION_UNITS,
+    LEAD,
     SEARCH_BUDGET,
     Avoider,
     Clearance,
     Obstacles,
+    _finish,
 )
 
 UP = math.pi / 2
@@ -263,6 +265,63 @@ def test_a_clear_answer_no_way_leads_to_is_traded_for_a_clear_answer_of_the_seed
     assert room.path_clear(start, steered.angles)
 
 
+def test_a_chain_hooked_round_a_shelfs_end_gets_a_way_in_under_it_within_half_a_second():
+    # Four 100 px links (the stress level under a low shelf): the second link stands up past
+    # the shelf's near end, the last two fold back down beside it, and the target is 100 px in
+    # under the shelf. Random poses almost never fall in the narrow band under it.
+    arm = Skeleton.chain([100.0] * 4, base_angle=UP, limits=[(-2.618, 2.618)] * 4)
+    obstacles = Obstacles.from_arrays(
+        np.array([[-500.0, -20.0, 600.0, -20.0, 4.0], [120.0, 110.0, 450.0, 110.0, 6.0]]),
+        NO_CIRCLES,
+    )
+    room = Clearance(arm, np.full(4, 6.0), obstacles)
+    hooked = np.radians([-64.0, 53.0, 128.0, 115.0])
+    target = np.array([220.0, 40.0])
+    through = Solution(np.radians([-30.0, -60.0, 60.0, 0.0]), SolveStatus.SUCCESS, 10, 0.0)
+    assert room.is_clear(hooked) and not room.is_clear(through.angles)
+    guide = Avoider(room)
+    commands = _settle(guide, hooked, through, target)
+    assert len(commands) <= 120  # calls of SEARCH_BUDGET units: half a second at 240 ticks/s
+    assert not np.array_equal(commands[-1].angles, through.angles)  # not given up
+    arrived = _move_as_told(guide, hooked, through, target, 600)
+    assert room.is_clear(arrived)
+    assert room.misses(arrived, target)[0] <= 0.5
+
+
+def test_on_a_route_the_chain_is_sent_along_its_line_just_ahead_of_its_slowest_joint():
+    room = _shelf_room()
+    guide = Avoider(room)
+    start = np.array([0.5, 0.3, 0.2])  # up-left, the way in under the shelf not straight
+    target = np.array([290.0, 45.0])
+    through = Solution(np.array([-0.3, -1.2, -0.6]), SolveStatus.SUCCESS, 10, 0.0)
+    lead = _settle(guide, start, through, target)[-1].angles - start
+    # Not the first via pose, a far swing away, but LEAD along the line toward it.
+    assert np.abs(lead).max() == pytest.approx(LEAD)
+    # The outer joints ran on twice as far as the first (they turn less mass): the command is
+    # one lead ahead of the first, the laggard, on the same line, and holds the others back.
+    ahead = start + lead * np.array([1.0, 2.0, 2.0])
+    command = guide.steer(ahead, through, target, 0.5).angles
+    assert np.allclose(command, start + 2.0 * lead)
+    assert room.path_clear(ahead, command)
+
+
+def test_a_route_past_the_target_and_back_is_cut_where_the_end_passes_nearest():
+    arm = Skeleton.chain([100.0, 100.0], base_angle=UP)
+    far = Obstacles.from_arrays(NO_SEGMENTS, np.array([[1000.0, 1000.0, 10.0]]))
+    room = Clearance(arm, np.full(2, 5.0), far)
+    target = np.array([0.0, 200.0])  # the arm straight up
+    start, past = np.array([0.6, 0.0]), np.array([-0.6, 0.0])
+    goal = np.array([0.05, -0.1])  # another pose reaching the target
+    way = _finish(room._trimming(start, [past, goal], target, 0.5))
+    # The arm swings through the target on its way to ``past``: it stops there instead.
+    assert len(way) == 2 and not any(np.array_equal(pose, past) for pose in way)
+    assert np.abs(way[0] - np.zeros(2)).max() < 0.02  # on the first piece, nearest the target
+    assert room.misses(way[1], target)[0] <= 0.5
+    assert room.path_clear(start, way[0]) and room.path_clear(way[0], way[1])
+    # A route whose end comes nearest at its last piece is left as it is.
+    assert _finish(room._trimming(start, [goal, past], target, 0.5)) == [goal, past]
+
+
 def test_route_is_none_when_the_limits_leave_no_way_round():
     arm = Skeleton.chain([100.0], base_angle=UP, limits=[(-1.0, 1.0)])
     post = Obstacles.from_arrays(NO_SEGMENTS, np.array([[0.0, 80.0, 10.0]]))
@@ -440,9 +499,9 @@ def test_with_replan_a_chain_carried_off_its_route_gets_a_new_one_from_where_it_
     through = Solution(np.array([-0.3, -1.2, -0.6]), SolveStatus.SUCCESS, 10, 0.0)
     while guide.steer(np.array([0.5, 0.3, 0.2]), through, target, 0.5) and guide.planning:
         pass
-    # Carried off the line, bent under the shelf's left end: straight on to the via pose the
-    # arm would sweep through the shelf.
-    off = np.array([-0.1, -2.03, 0.23])
+    # Carried off the line, reaching in under the shelf: straight on to the via pose (the arm
+    # folded up on the left) it would sweep through the shelf.
+    off = np.array([0.0, -1.8, 0.0])
     assert room.is_clear(off)
     command = guide.steer(off, through, target, 0.5)
     while guide.planning:  # a new route is searched for while the chain holds where it is
