@@ -61,21 +61,26 @@ def test_a_torque_saturated_arm_comes_to_rest_then_reaches_what_it_can():
     assert np.hypot(*(tips[-1] - (-60.0, -150.0))) < 1.0
 
 
+def _hanging_arm(spec: list[tuple[float, float, float]], solver: str) -> Simulation:
+    """Links of (length px, mass, max_torque) hanging straight down in gravity of 1500 px/s^2,
+    limits +-160 deg, 150 deg/s."""
+    links = [
+        {"length": length, "mass": mass, "max_torque": torque, "limits": [-160.0, 160.0]}
+        for length, mass, torque in spec
+    ]
+    links = [{**link, "max_speed": 150.0} for link in links]
+    level = _level(links, [{"wait": 20.0}], gravity=(0, -1500), solver=solver)
+    level = level.model_copy(update={"chain": level.chain.model_copy(update={"angle": -90.0})})
+    return Simulation(level, record=False)
+
+
 @pytest.mark.parametrize("solver", ["ccd", "fabrik"])
 def test_three_weak_links_come_to_rest_where_their_torque_runs_out(solver):
     # Out nearly level, the base needs about 7e5 and has 6e5. The servo once propped the base
     # up with the outer joints' accelerations every other tick (it sagged at two thirds of its
     # torque), and its torque alternated between the limit and just under it from tick to tick,
     # so the anti-windup never saw it stall: the arm swung 28-48 px for good.
-    links = [
-        {"length": 110.0, "mass": 1.5, "max_torque": 6.0e5},
-        {"length": 100.0, "mass": 1.2, "max_torque": 3.0e5},
-        {"length": 80.0, "mass": 1.0, "max_torque": 1.5e5},
-    ]
-    links = [{**link, "limits": [-160.0, 160.0], "max_speed": 150.0} for link in links]
-    level = _level(links, [{"wait": 20.0}], gravity=(0, -1500), solver=solver)
-    level = level.model_copy(update={"chain": level.chain.model_copy(update={"angle": -90.0})})
-    sim = Simulation(level, record=False)
+    sim = _hanging_arm([(110.0, 1.5, 6.0e5), (100.0, 1.2, 3.0e5), (80.0, 1.0, 1.5e5)], solver)
     sim.target = (270.0, -40.0)
     last = _tip_track(sim, 5.0)[-round(0.5 / sim.dt) :]
     assert np.ptp(last, axis=0).max() < 1.0
@@ -93,15 +98,7 @@ def test_five_weak_links_come_to_rest_and_report_blocked(solver):
     # toward the tip. The arm swings 109 px (DLS) and 86 px (FABRIK) for good, reporting
     # success far from the target.
     spec = [(60.0, 1.0, 6.0e5), (60.0, 1.0, 4.0e5), (60.0, 1.0, 2.5e5), (50.0, 0.8, 1.2e5)]
-    spec.append((50.0, 0.6, 3.0e4))
-    links = [
-        {"length": length, "mass": mass, "max_torque": torque, "limits": [-160.0, 160.0]}
-        for length, mass, torque in spec
-    ]
-    links = [{**link, "max_speed": 150.0} for link in links]
-    level = _level(links, [{"wait": 20.0}], gravity=(0, -1500), solver=solver)
-    level = level.model_copy(update={"chain": level.chain.model_copy(update={"angle": -90.0})})
-    sim = Simulation(level, record=False)
+    sim = _hanging_arm([*spec, (50.0, 0.6, 3.0e4)], solver)
     sim.target = (252.0, -40.0)
     last = _tip_track(sim, 5.0)[-round(0.5 / sim.dt) :]
     assert np.ptp(last, axis=0).max() < 1.0
