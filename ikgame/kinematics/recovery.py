@@ -18,9 +18,11 @@ once per tick:
 3. **Recovery**, only when the plain solve stalled short of a target within reach: ``FAILURE``;
    ``PROCESSING`` having gained less than ``STALL_PROGRESS`` of its start error; or
    ``STALL_CALLS`` calls on one target without arriving. It restarts from other seeds, the
-   nearest to the stalled pose first. Damped least squares goes first, from the stalled pose and
-   from that pose moved ``BACK_OFF`` off the limits: its steps are the shortest that move the
-   end effector, so it finds the answer nearest the pose. Once the target has held still for
+   nearest to the chain first. Damped least squares goes first, from the stalled pose and from
+   that pose moved ``BACK_OFF`` off the limits (and before them from the measured pose, when the
+   stalled one has wandered ``WANDERED`` from it: a stalled CCD answer can coil far from the
+   chain): its steps are the shortest that move the end effector, so it finds the answer
+   nearest the pose. Once the target has held still for
    ``STILL_CALLS`` calls (a moving target would be elsewhere by the time the chain had swung
    round), far seeds follow, each run by the solver and then by its ``FALLBACK`` from where that
    stopped: each of the first ``ROUND_JOINTS`` joints turned to aim at the target the other way
@@ -74,6 +76,7 @@ __all__ = [
     "SEED_ITERATIONS",
     "RANDOM_SEEDS",
     "RANDOM_SEED",
+    "WANDERED",
     "STALL_PROGRESS",
     "RETRY_CALLS",
     "STALL_CALLS",
@@ -113,6 +116,10 @@ from then on the plain solve answers again."""
 
 STILL_CALLS: Final = 2
 """Calls with one and the same target before restarts may go far from the stalled pose."""
+
+WANDERED: Final = math.pi
+"""Joint turns (radians, summed over the joints) beyond which a stalled answer has wandered from
+the chain's pose, and the restarts begin at the chain's pose instead."""
 
 STALL_PROGRESS: Final = 0.01
 """A solve still ``PROCESSING`` that gained less than this fraction of its start error stalled."""
@@ -302,7 +309,7 @@ class RobustSolver:
             math.sqrt(chain.error_sqr(skeleton.clamp(start).tolist(), *goal)),
             lambda angles: (_error(skeleton, angles, target), None),
             lambda stalled: (
-                _near_seeds(skeleton, self._solve, stalled),
+                _near_seeds(skeleton, self._solve, skeleton.clamp(start), stalled),
                 _far_seeds(skeleton, self._solve, self._fallback, stalled, target),
             ),
         )
@@ -381,7 +388,9 @@ class RobustSolver:
             measure(skeleton.clamp(start))[0],
             measure,
             lambda stalled: (
-                _near_seeds(skeleton, self._solve_targets, stalled, solve_dls_targets),
+                _near_seeds(
+                    skeleton, self._solve_targets, skeleton.clamp(start), stalled, solve_dls_targets
+                ),
                 _far_tree_seeds(skeleton, self._solve_targets, self._fallback_targets),
             ),
         )
@@ -619,13 +628,18 @@ def _out_of_reach(skeleton: Skeleton, targets: TargetSet, tol: float) -> bool:
 def _near_seeds(
     skeleton: Skeleton,
     solve: Solver | TargetSolver,
+    here: np.ndarray,
     stalled: np.ndarray,
     dls: Solver | TargetSolver = solve_dls,
 ) -> _Seeds:
     """Restarts next to the stalled pose, by damped least squares (``dls``, the chain's or the
     multi-target one): its steps are the shortest that move the end effector, so it finds the
-    answer nearest the pose (CCD would turn the last joints first, whatever the distance)."""
+    answer nearest the pose. From the chain's pose ``here`` first when the stalled one has
+    wandered more than ``WANDERED`` from it (CCD turns the last joints first, whatever the
+    distance, and can coil a long chain the long way round)."""
     if solve is not dls:
+        if float(np.abs(stalled - here).sum()) > WANDERED:
+            yield here, (dls,)
         yield stalled, (dls,)
     yield _backed_off(skeleton, stalled), (dls,)
 

@@ -146,6 +146,32 @@ def test_a_light_chain_coiled_into_its_limits_uncoils():
     assert trapped >= 5
 
 
+def test_a_stalled_ccd_restarts_next_to_the_chain_not_next_to_its_coil():
+    # Twenty light links, slightly curled, and a target behind and below the base: CCD from the
+    # chain's pose crawls, coiling the chain the long way round. The chain does not move while
+    # it is asked (a chain waiting for its answer), and the answer the search settles on turns
+    # the joints no more than least squares from where the chain is: once, the search restarted
+    # next to CCD's coil and took an answer turning them 1,000 deg in all, not 600.
+    chain = Skeleton.chain([15.0] * 20, base_angle=PI / 2, limits=[(r(-160), r(160))] * 20)
+    for curl, target in (
+        (-0.075, (-100.0, -200.0)),
+        (0.0, (-100.0, -200.0)),
+        (-0.078, (-150.0, -150.0)),
+    ):
+        here = np.full(20, curl)
+        robust = RobustSolver(chain, "ccd")
+        for _ in range(60):
+            sol = robust.solve(here, np.array(target), tolerance=TOLERANCE)
+            if sol.status is not SolveStatus.PROCESSING:
+                break
+        assert sol.status is SolveStatus.SUCCESS
+        nearest = SOLVERS["dls"](
+            chain, here, np.array(target), max_iterations=50, tolerance=TOLERANCE
+        )
+        assert nearest.status is SolveStatus.SUCCESS
+        assert np.abs(sol.angles - here).sum() <= 1.05 * np.abs(nearest.angles - here).sum()
+
+
 @pytest.mark.parametrize("name", NAMES)
 def test_tight_symmetric_limits(name):
     rng = np.random.default_rng(10)
