@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import copy
 import re
+import signal
 import subprocess
 from pathlib import Path
 
@@ -18,6 +19,21 @@ from ikgame.level.model import Level
 # only when a shared machine is busy, so it is off.
 settings.register_profile("ikgame", derandomize=True, suppress_health_check=[HealthCheck.too_slow])
 settings.load_profile("ikgame")
+
+
+@pytest.fixture
+def interruptible():
+    """Ctrl-C reaches the commands a test starts, however the tests themselves were started.
+
+    A shell that starts a command in the background (``cmd &``, without job control) has it
+    ignore SIGINT, and a child inherits an ignored signal: a Python that starts with SIGINT
+    ignored installs no KeyboardInterrupt, so the tests of Ctrl-C would see nothing. A handled
+    signal is reset to its default in a child instead.
+    """
+    before = signal.signal(signal.SIGINT, signal.default_int_handler)
+    yield
+    signal.signal(signal.SIGINT, before)
+
 
 _BASE = {
     "level": {"name": "test", "duration": 6.0},

@@ -96,7 +96,9 @@ STOP_AT = (2, random.Random(12).randrange(3, 80))
 @pytest.mark.parametrize(
     "sig, code, word", [(signal.SIGTERM, 143, "terminated"), (signal.SIGINT, 130, "interrupted")]
 )
-def test_a_stopped_export_exits_cleanly_and_keeps_whole_frames(tmp_path, sig, code, word, at):
+def test_a_stopped_export_exits_cleanly_and_keeps_whole_frames(
+    tmp_path, sig, code, word, at, interruptible
+):
     out = tmp_path / "out"
     proc = _start(out, "--workers", "2")
     _wait_for(lambda: len(_frames(out)) >= at, f"{at} frames")

@@ -151,7 +151,7 @@ def test_watch_refuses_a_non_empty_out_folder_at_once(tmp_path, level_file, caps
     assert sorted(p.name for p in out.iterdir()) == ["keep.txt"]
 
 
-def test_ctrl_c_stops_watching_with_exit_code_zero(tmp_path, level_file):
+def test_ctrl_c_stops_watching_with_exit_code_zero(tmp_path, level_file, interruptible):
     out = tmp_path / "out"
     proc = subprocess.Popen(
         [
