@@ -20,6 +20,7 @@ from typing import Final
 import numpy as np
 
 from ikgame.control._floats import damped_rates
+from ikgame.control.dynamics import Pose
 from ikgame.control.servo import FLOAT_LINKS, Servo, ServoCommand
 from ikgame.kinematics import (
     RobustSolver,
@@ -109,6 +110,7 @@ class Controller:
         self._held: np.ndarray | None = None
         self._holding = False
         self._last_target: np.ndarray | None = None
+        self._gravity: tuple[float, float] | None = None
 
     @property
     def gain(self) -> float:
@@ -247,6 +249,26 @@ class Controller:
         scale = 1.0 if worst <= 1.0 else worst
         return np.array([rate / scale for rate in rates])
 
+    def _know_strain(self, gravity: tuple[float, float] | np.ndarray) -> None:
+        """Tell a chain's solver what holding a pose still under ``gravity`` (px/s^2) takes of
+        the motors, so that it prefers poses they can hold (see
+        :attr:`RobustSolver.strain`)."""
+        pull = (float(gravity[0]), float(gravity[1]))
+        if pull == self._gravity:
+            return
+        self._gravity = pull
+        servo = self.servo
+        if servo is None or not self.skeleton.is_chain or not any(pull):
+            self.solver.strain = None
+            return
+        inertia, limit = servo.inertia, servo.max_torque
+
+        def strain(angles: np.ndarray) -> float:
+            world = self.skeleton.world_angles(angles)
+            return float(np.max(np.abs(Pose(inertia, world).loads(gravity=pull).torques) / limit))
+
+        self.solver.strain = strain
+
     def hold(self, measured: np.ndarray) -> None:
         """Stop pushing: hold the ``measured`` pose (radians) instead of solving, until
         :meth:`release`. The response to a blocked chain: pressing on against an obstacle or a
@@ -309,6 +331,7 @@ class Controller:
             return Command(solution, rates)
         if velocities is None or dt is None:
             raise ValueError("a controller with a servo needs the joint velocities and dt")
+        self._know_strain(gravity)
         moved = target is not None and _moved(target, self._last_target)
         if moved:
             # The goal may be within the torque budget now: stalled joints try again.
