@@ -316,27 +316,35 @@ class RobustSolver:
         )
         skeleton = self._skeleton
         target = np.array(goal)
-        if plain.status is SolveStatus.SUCCESS:
-            strain = self.strain
-            if strain is not None and goal != self._unheld and strain(plain.angles) > STRAINED:
-                return self._held(
-                    plain,
-                    goal,
-                    target,
-                    tol,
-                    (
-                        _near_seeds(skeleton, self._solve, skeleton.clamp(start), plain.angles),
-                        _far_seeds(
-                            skeleton,
-                            self._solve,
-                            self._fallback,
-                            plain.angles,
-                            target,
-                            HOLD_SEEDS,
-                        ),
+        strain = self.strain
+        if (
+            plain.status is not SolveStatus.FAILURE
+            and strain is not None
+            and goal != self._unheld
+            and strain(plain.angles) > STRAINED
+        ):
+            # Still on its way too: a solver that takes many calls to arrive (CCD) would
+            # otherwise bring the end to the target in a pose the motors cannot hold, and the
+            # switch to one they can would carry it away again.
+            return self._held(
+                plain,
+                goal,
+                target,
+                tol,
+                (
+                    _near_seeds(skeleton, self._solve, skeleton.clamp(start), plain.angles),
+                    _far_seeds(
+                        skeleton,
+                        self._solve,
+                        self._fallback,
+                        plain.angles,
+                        target,
+                        HOLD_SEEDS,
                     ),
-                    strain,
-                )
+                ),
+                strain,
+            )
+        if plain.status is SolveStatus.SUCCESS:
             # Arriving from where an unfinished search left the chain is that search's answer.
             search = self._search
             followed = (
