@@ -211,6 +211,42 @@ def test_a_joint_the_chain_s_motion_carries_off_does_not_stall(floats):
     assert servo.stalled.tolist() == [False, False]
 
 
+@pytest.mark.parametrize("floats", [True, False], ids=["floats", "numpy"])
+def test_a_joint_gravity_overloads_stalls_while_it_sags_at_a_steady_speed(floats):
+    # Held out level, the link needs 2e4 against gravity and its motor has 1.5e4: it pushes
+    # for its goal above at its limit and sags at a steady 0.1 rad/s. A stall once needed the
+    # joint to be carried off faster and faster, so it never stalled and, at its limit, went
+    # on setting the chain's one acceleration factor: the arms of 29_five_weak_links swung.
+    one = ChainInertia(np.array([40.0]), np.array([1.0]), np.array([1600.0 / 12.0]))
+    servo = Servo(one, max_torque=np.array([1.5e4]), max_speed=np.array([3.0]), gain=12.0)
+    if not floats:
+        servo._floats = None  # the numpy path, as chains longer than FLOAT_LINKS take
+    for _ in range(40):  # 0.17 s, past STALL_TIME
+        command = servo.command(
+            np.array([0.5]), np.zeros(1), np.array([-0.1]), (0.0, -1000.0), 1 / 240
+        )
+        assert command.torques[0] == pytest.approx(1.5e4)
+    assert servo.stalled.tolist() == [True]
+
+
+def test_four_weak_links_reach_out_in_a_pose_their_motors_hold():
+    # The first target of 30_four_weak_links: CCD's answer asked the second joint for 1.07 to
+    # 1.11 of its torque; the joint gave way and the arm fell 220 px below the target (later,
+    # switched to a pose it could hold only once the tip was already there, it swung 57 px
+    # away and back). The solver now looks for a pose within every motor's torque.
+    spec = [(80.0, 1.0, 8.0e5), (80.0, 1.0, 4.0e5), (70.0, 1.0, 2.0e5), (60.0, 0.8, 6.0e4)]
+    sim = _hanging_arm(spec, "ccd")
+    target = np.array([261.0, -40.0])
+    start = sim.joint_positions()[-1].copy()
+    sim.target = target
+    tips = _tip_track(sim, 4.0)
+    approach = (target - start) / np.linalg.norm(target - start)
+    assert float(np.max((tips - target) @ approach)) <= 0.05 * np.linalg.norm(target - start)
+    last = tips[-round(0.5 / sim.dt) :]
+    assert np.hypot(*(last[-1] - target)) < 6.0
+    assert np.ptp(last, axis=0).max() < 0.5
+
+
 def test_two_hundred_links_swing_over_to_the_other_side_within_their_limits():
     # The longest chain the format allows, under gravity (as the 200-link stress level, with
     # shorter holds): the second target is on the other side of the base. The base runs out of
