@@ -20,7 +20,6 @@ from typing import Final
 import numpy as np
 
 from ikgame.control._floats import damped_rates
-from ikgame.control.dynamics import Pose
 from ikgame.control.servo import FLOAT_LINKS, Servo, ServoCommand
 from ikgame.kinematics import (
     RobustSolver,
@@ -261,13 +260,7 @@ class Controller:
         if servo is None or not self.skeleton.is_chain or not any(pull):
             self.solver.strain = None
             return
-        inertia, limit = servo.inertia, servo.max_torque
-
-        def strain(angles: np.ndarray) -> float:
-            world = self.skeleton.world_angles(angles)
-            return float(np.max(np.abs(Pose(inertia, world).loads(gravity=pull).torques) / limit))
-
-        self.solver.strain = strain
+        self.solver.strain = lambda angles: servo.strain(self.skeleton.world_angles(angles), pull)
 
     def hold(self, measured: np.ndarray) -> None:
         """Stop pushing: hold the ``measured`` pose (radians) instead of solving, until

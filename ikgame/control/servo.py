@@ -9,14 +9,17 @@ This servo instead:
    is the deceleration the joint's spare torque (its limit less what gravity takes) gives the
    inertia beyond it: a velocity it can still brake from in time;
 2. never asks a joint for a velocity change it cannot make in one tick (``a x dt``), and a
-   joint at its torque limit toward its goal yet carried away from it, with its static load
-   taking at least half its torque that way, asks only to stop until the target moves
-   (anti-windup): it comes to rest where its torque runs out instead of swinging there;
+   joint at its torque limit toward its goal yet carried away from it (faster and faster, or
+   at any speed past a creep when gravity overloads it), with its static load taking at least
+   half its torque that way, asks only to stop until the target moves (anti-windup): it comes
+   to rest where its torque runs out instead of swinging there;
 3. turns the wanted velocity change into feed-forward torques and pivot forces with the chain's
    dynamics (:func:`~ikgame.control.dynamics.plan_drive`), within the torque limits, so that the
    physics engine's motors only correct what the model missed. Without that, the constraint
    solver would have to find the torques of a long chain by itself in a few iterations, and it
-   does not: a 30-link chain never settles.
+   does not: a 30-link chain never settles. A joint that stalled, or that gravity overloads,
+   gives way at its limit where the motion needs more of it, rather than set the one factor
+   every other joint's acceleration is scaled by (:func:`~ikgame.control.dynamics.give_way`).
 
 Units: radians, rad/s, px, s, torques mass px^2/s^2.
 """
@@ -131,6 +134,22 @@ class Servo:
         """(n,) bool: joints that gave up pushing for their goal at their torque limit (see
         :meth:`retry`)."""
         return np.array(self._stalled, dtype=bool)
+
+    def strain(self, world_angles: np.ndarray, gravity: tuple[float, float]) -> float:
+        """The largest share of a joint's torque limit that holding the chain still at
+        ``world_angles`` (per link, radians) takes under ``gravity`` (px/s^2): past 1, the
+        motors cannot hold the pose.
+
+        >>> one = ChainInertia(np.array([10.0]), np.array([2.0]), np.array([50.0 / 3.0]))
+        >>> servo = Servo(one, max_torque=np.array([1.8e4]), max_speed=np.ones(1), gain=12.0)
+        >>> servo.strain(np.zeros(1), (0.0, -900.0))
+        0.5
+        """
+        if self._floats is not None:
+            held = self._floats.pose(world_angles).loads(gravity=gravity)[0]
+            return max(abs(h) / lim for h, lim in zip(held, self._limits, strict=True))
+        held = Pose(self.inertia, world_angles).loads(gravity=gravity).torques
+        return float(np.max(np.abs(held) / self.max_torque))
 
     def _room(self, torques: np.ndarray, hold: np.ndarray, share: float) -> np.ndarray:
         """The ``share`` of each joint's torque left, beyond its ``hold`` load, on the side of

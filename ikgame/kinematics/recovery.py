@@ -38,6 +38,13 @@ once per tick:
 A target beyond the chain's reach gets the chain stretched straight toward it at once, when the
 limits allow that pose (it is the closest any pose can come), with ``FAILURE``.
 
+With :attr:`RobustSolver.strain` set (what holding a pose still takes of the motors, which only
+the caller knows: this package knows no dynamics), a plain answer, arrived or still on its way,
+that takes more than ``STRAINED`` of some motor's limit starts the same restarts (with
+``HOLD_SEEDS`` random poses), in which only an arrival within ``HOLDS`` counts; the first is
+followed like a far seed's answer. Until one is found the plain answer serves, and once every
+seed has failed it serves for as long as the goal stays.
+
 :meth:`RobustSolver.solve_targets` is the same for a tree and a
 :class:`~ikgame.kinematics.targets.TargetSet`, with the multi-target solvers: the cache, the
 stall test (on the largest distance), the near restarts by damped least squares, then the middle
