@@ -40,7 +40,8 @@ limits allow that pose (it is the closest any pose can come), with ``FAILURE``.
 
 With :attr:`RobustSolver.strain` set (what holding a pose still takes of the motors, which only
 the caller knows: this package knows no dynamics), a plain answer, arrived or still on its way,
-that takes more than ``STRAINED`` of some motor's limit starts the same restarts (with
+that takes more than ``STRAINED`` of some motor's limit starts, once the target has held still
+for ``STILL_CALLS`` calls, the same restarts (with
 ``HOLD_SEEDS`` random poses), in which only an arrival within ``HOLDS`` counts; the first is
 followed like a far seed's answer. Until one is found the plain answer serves, and once every
 seed has failed it serves for as long as the goal stays.
@@ -328,11 +329,13 @@ class RobustSolver:
             plain.status is not SolveStatus.FAILURE
             and strain is not None
             and goal != self._unheld
+            and self._waiting >= STILL_CALLS
             and strain(plain.angles) > STRAINED
         ):
             # Still on its way too: a solver that takes many calls to arrive (CCD) would
             # otherwise bring the end to the target in a pose the motors cannot hold, and the
-            # switch to one they can would carry it away again.
+            # switch to one they can would carry it away again. Only for a target that holds
+            # still: one that moves would start a search, and pay its budget, on every call.
             return self._held(
                 plain,
                 goal,
@@ -581,7 +584,7 @@ class RobustSolver:
             search = self._search = _Search(
                 *seeds, target, tol, lambda angles: strain(angles) <= HOLDS
             )
-        search.far = self._waiting >= STILL_CALLS
+        search.far = True
         used = search.run(self._skeleton, target, tol, self.budget)
         if search.best is not None and search.arrived:
             error = _error(self._skeleton, search.best, target)

@@ -595,3 +595,19 @@ def test_when_no_pose_can_be_held_the_plain_answer_serves_without_searching_agai
     plain = RobustSolver(arm, "dls").solve(pose, target, max_iterations=10, tolerance=TOLERANCE)
     assert max(iterations[:5]) > plain.iterations  # it searched
     assert iterations[-5:] == [plain.iterations] * 5  # and then gave up searching
+
+
+def test_a_moving_target_starts_no_search_for_a_pose_the_motors_can_hold():
+    # A target that moves every call would start a search, and pay its budget, on every call.
+    arm = Skeleton.chain([100.0, 100.0])
+    robust, plain = RobustSolver(arm, "dls"), RobustSolver(arm, "dls")
+    robust.strain = lambda angles: 2.0
+    pose = np.array([0.3, 0.8])
+    for step in range(20):
+        target = np.array([120.0 + 3.0 * step, 60.0])
+        sol = robust.solve(pose, target, max_iterations=10, tolerance=TOLERANCE)
+        assert (
+            sol.iterations
+            == plain.solve(pose, target, max_iterations=10, tolerance=TOLERANCE).iterations
+        )
+        pose = sol.angles
