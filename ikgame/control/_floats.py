@@ -13,7 +13,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ikgame.control.dynamics import ChainInertia
+from ikgame.control.dynamics import ChainInertia, give_way
 
 Loads = tuple[list[float], list[float], list[float]]
 """Joint torques, then the x and y of the pivot forces, per joint."""
@@ -289,6 +289,7 @@ def fit_floats(
     wanted: list[float],
     limits: list[float],
     head: Callable[[int], Loads] | None = None,
+    weak: tuple[list[bool], Callable[[int], Loads]] | None = None,
 ) -> tuple[list[float], Loads, list[bool], bool]:
     """:func:`~ikgame.control.dynamics.fit_drive` over lists: the accelerations, the loads,
     which joints are saturated, and whether the loads are those of the motion."""
@@ -303,6 +304,10 @@ def fit_floats(
         fx = [b + p for b, p in zip(bias[1], push[1], strict=True)]
         fy = [b + p for b, p in zip(bias[2], push[2], strict=True)]
         return wanted, (torques, fx, fy), [False] * len(limits), True
+    if weak is not None:
+        gave = give_way(bias, push, wanted, limits, *weak)
+        if gave is not None:
+            return *gave, True
     scale, binding = None, 0
     if all(abs(b) <= lim for b, lim in zip(bias[0], limits, strict=True)):
         scale, binding = _largest_factor(bias[0], push[0], limits)

@@ -109,6 +109,7 @@ class Controller:
         self._held: np.ndarray | None = None
         self._holding = False
         self._last_target: np.ndarray | None = None
+        self._gravity: tuple[float, float] | None = None
 
     @property
     def gain(self) -> float:
@@ -247,6 +248,20 @@ class Controller:
         scale = 1.0 if worst <= 1.0 else worst
         return np.array([rate / scale for rate in rates])
 
+    def _know_strain(self, gravity: tuple[float, float] | np.ndarray) -> None:
+        """Tell a chain's solver what holding a pose still under ``gravity`` (px/s^2) takes of
+        the motors, so that it prefers poses they can hold (see
+        :attr:`RobustSolver.strain`)."""
+        pull = (float(gravity[0]), float(gravity[1]))
+        if pull == self._gravity:
+            return
+        self._gravity = pull
+        servo = self.servo
+        if servo is None or not self.skeleton.is_chain or not any(pull):
+            self.solver.strain = None
+            return
+        self.solver.strain = lambda angles: servo.strain(self.skeleton.world_angles(angles), pull)
+
     def hold(self, measured: np.ndarray) -> None:
         """Stop pushing: hold the ``measured`` pose (radians) instead of solving, until
         :meth:`release`. The response to a blocked chain: pressing on against an obstacle or a
@@ -309,6 +324,7 @@ class Controller:
             return Command(solution, rates)
         if velocities is None or dt is None:
             raise ValueError("a controller with a servo needs the joint velocities and dt")
+        self._know_strain(gravity)
         moved = target is not None and _moved(target, self._last_target)
         if moved:
             # The goal may be within the torque budget now: stalled joints try again.

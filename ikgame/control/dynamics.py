@@ -15,6 +15,7 @@ so where on it a root's joint sits changes none of the loads. A serial chain
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
 from functools import cached_property
@@ -355,6 +356,7 @@ def fit_drive(
     wanted: np.ndarray,
     max_torque: np.ndarray,
     head: Callable[[int], JointLoads] | None = None,
+    weak: tuple[list[bool], Callable[[int], JointLoads]] | None = None,
 ) -> Drive:
     """:func:`plan_drive` from its parts: ``bias``, the loads of coasting (gravity and the
     swing), and ``push``, those of the ``wanted`` accelerations alone.
@@ -362,11 +364,29 @@ def fit_drive(
     With ``head``, a function giving the loads of the wanted accelerations of joints ``0..k``
     alone, the joints up to the one that runs out of torque keep their wanted accelerations and
     only those beyond it are scaled (see :func:`plan_drive`); without it, every joint's.
+
+    With ``weak``, which joints may give way and a function giving the loads of a unit
+    acceleration of joint ``k`` alone, a weak joint the motion would take past its limit gives
+    way at it instead of setting the factor for everyone (see :func:`give_way`).
     """
     limit = np.asarray(max_torque, dtype=float)
     full = bias + push
     if np.all(np.abs(full.torques) <= limit):
         return Drive(wanted, full, np.zeros(len(limit), dtype=bool))
+    if weak is not None:
+        mask, column = weak
+        gave = give_way(
+            _listed(bias),
+            _listed(push),
+            wanted.tolist(),
+            limit.tolist(),
+            mask,
+            lambda k: _listed(column(k)),
+        )
+        if gave is not None:
+            accelerations, (torques, fx, fy), saturated = gave
+            loads = JointLoads(np.array(torques), np.column_stack((fx, fy)))
+            return Drive(np.array(accelerations), loads, np.array(saturated))
     scale, binding = None, 0
     if np.all(np.abs(bias.torques) <= limit):
         scale, binding = _largest_factor(bias, push, limit)
@@ -412,3 +432,105 @@ def _largest_factor(
     if holds and low <= high and low <= 1.0 and high >= 0.0:
         return min(1.0, high), binding
     return None, binding
+
+
+ListLoads = tuple[list[float], list[float], list[float]]
+"""Joint torques, then the x and y of the pivot forces, per joint, as lists."""
+
+
+def _listed(loads: JointLoads) -> ListLoads:
+    return loads.torques.tolist(), loads.forces[:, 0].tolist(), loads.forces[:, 1].tolist()
+
+
+def give_way(
+    bias: ListLoads,
+    push: ListLoads,
+    wanted: list[float],
+    limits: list[float],
+    weak: list[bool],
+    column: Callable[[int], ListLoads],
+) -> tuple[list[float], ListLoads, list[bool]] | None:
+    """The motion in which the ``weak`` joints the ``wanted`` one takes past their limits give
+    way at them, and every other joint's acceleration is scaled by the largest factor up to 1
+    that keeps it within its own: the accelerations, the loads and which joints are saturated;
+    None when no weak joint is past its limit or no such motion fits.
+
+    A joint gravity overloads (or one that gave its goal up) cannot have the acceleration it is
+    asked for whatever the others do. Taken as the one factor for the whole chain, its shortfall
+    leaves the other joints a fraction of their torque to brake with, and an arm whose weak
+    joint sags swings like a pendulum about it. Here its torque is held at its limit (the side
+    the motion asked for) and its acceleration is whatever that torque gives with the others'
+    motion: the loads are affine in the accelerations, so the weak joints' own accelerations
+    come from a small linear system (their block of the joint-space inertia, positive
+    definite), and the loads stay those of one motion, which leaves the physics engine nothing
+    to reconcile. ``column(k)`` gives the loads of a unit acceleration of joint ``k`` alone
+    (rad/s^2, child - parent); torques are in mass px^2/s^2.
+
+    >>> one = ([1.0], [0.0], [0.0])
+    >>> give_way(([3.0], [0.0], [0.0]), ([1.0], [0.0], [0.0]), [1.0], [2.0], [True],
+    ...          lambda k: one)
+    ([-1.0], ([2.0], [0.0], [0.0]), [True])
+    """
+    over = [
+        k
+        for k, (b, p, lim, w) in enumerate(zip(bias[0], push[0], limits, weak, strict=True))
+        if w and not abs(b + p) <= lim
+    ]
+    if not over:
+        return None
+    columns = [column(k) for k in over]
+    # The others' push: the wanted motion less the weak joints' own share of it.
+    rest = push
+    for k, col in zip(over, columns, strict=True):
+        rest = _plus(rest, col, -wanted[k])
+    block = [[col[0][k] for col in columns] for k in over]
+    at = [math.copysign(limits[k], bias[0][k] + push[0][k]) for k in over]
+    fixed = _solve(block, [a - bias[0][k] for a, k in zip(at, over, strict=True)])
+    slope = _solve(block, [-rest[0][k] for k in over])
+    start, scaled = bias, rest
+    for col, x0, x1 in zip(columns, fixed, slope, strict=True):
+        start, scaled = _plus(start, col, x0), _plus(scaled, col, x1)
+    for k, a in zip(over, at, strict=True):
+        start[0][k], scaled[0][k] = a, 0.0
+    if not all(abs(b) <= lim for b, lim in zip(start[0], limits, strict=True)):
+        return None
+    low, high = -math.inf, math.inf
+    for b, s, lim in zip(start[0], scaled[0], limits, strict=True):
+        if s != 0.0:
+            to_upper, to_lower = (lim - b) / s, (-lim - b) / s
+            low, high = max(low, min(to_upper, to_lower)), min(high, max(to_upper, to_lower))
+    if not (low <= high and low <= 1.0 and high >= 0.0):
+        return None
+    factor = min(1.0, high)
+    accelerations = [factor * w for w in wanted]
+    for k, x0, x1 in zip(over, fixed, slope, strict=True):
+        accelerations[k] = x0 + factor * x1
+    loads = _plus(start, scaled, factor)
+    saturated = [abs(t) >= lim * (1.0 - 1e-9) for t, lim in zip(loads[0], limits, strict=True)]
+    return accelerations, loads, saturated
+
+
+def _plus(a: ListLoads, b: ListLoads, factor: float) -> ListLoads:
+    """``a + factor b``, list by list."""
+    return (
+        [x + factor * y for x, y in zip(a[0], b[0], strict=True)],
+        [x + factor * y for x, y in zip(a[1], b[1], strict=True)],
+        [x + factor * y for x, y in zip(a[2], b[2], strict=True)],
+    )
+
+
+def _solve(matrix: list[list[float]], rhs: list[float]) -> list[float]:
+    """``matrix x = rhs`` for a small symmetric positive definite ``matrix``, by elimination
+    without pivoting (stable for such a matrix), over floats."""
+    size = len(rhs)
+    rows = [[*row, r] for row, r in zip(matrix, rhs, strict=True)]
+    for i in range(size):
+        pivot = rows[i][i]
+        for j in range(i + 1, size):
+            ratio = rows[j][i] / pivot
+            rows[j] = [x - ratio * y for x, y in zip(rows[j], rows[i], strict=True)]
+    x = [0.0] * size
+    for i in reversed(range(size)):
+        row = rows[i]
+        x[i] = (row[size] - math.fsum(row[j] * x[j] for j in range(i + 1, size))) / row[i]
+    return x

@@ -9,14 +9,17 @@ This servo instead:
    is the deceleration the joint's spare torque (its limit less what gravity takes) gives the
    inertia beyond it: a velocity it can still brake from in time;
 2. never asks a joint for a velocity change it cannot make in one tick (``a x dt``), and a
-   joint at its torque limit toward its goal yet carried away from it, with its static load
-   taking at least half its torque that way, asks only to stop until the target moves
-   (anti-windup): it comes to rest where its torque runs out instead of swinging there;
+   joint at its torque limit toward its goal yet carried away from it (faster and faster, or
+   at any speed past a creep when gravity overloads it), with its static load taking at least
+   half its torque that way, asks only to stop until the target moves (anti-windup): it comes
+   to rest where its torque runs out instead of swinging there;
 3. turns the wanted velocity change into feed-forward torques and pivot forces with the chain's
    dynamics (:func:`~ikgame.control.dynamics.plan_drive`), within the torque limits, so that the
    physics engine's motors only correct what the model missed. Without that, the constraint
    solver would have to find the torques of a long chain by itself in a few iterations, and it
-   does not: a 30-link chain never settles.
+   does not: a 30-link chain never settles. A joint that stalled, or that gravity overloads,
+   gives way at its limit where the motion needs more of it, rather than set the one factor
+   every other joint's acceleration is scaled by (:func:`~ikgame.control.dynamics.give_way`).
 
 Units: radians, rad/s, px, s, torques mass px^2/s^2.
 """
@@ -132,6 +135,22 @@ class Servo:
         :meth:`retry`)."""
         return np.array(self._stalled, dtype=bool)
 
+    def strain(self, world_angles: np.ndarray, gravity: tuple[float, float]) -> float:
+        """The largest share of a joint's torque limit that holding the chain still at
+        ``world_angles`` (per link, radians) takes under ``gravity`` (px/s^2): past 1, the
+        motors cannot hold the pose.
+
+        >>> one = ChainInertia(np.array([10.0]), np.array([2.0]), np.array([50.0 / 3.0]))
+        >>> servo = Servo(one, max_torque=np.array([1.8e4]), max_speed=np.ones(1), gain=12.0)
+        >>> servo.strain(np.zeros(1), (0.0, -900.0))
+        0.5
+        """
+        if self._floats is not None:
+            held = self._floats.pose(world_angles).loads(gravity=gravity)[0]
+            return max(abs(h) / lim for h, lim in zip(held, self._limits, strict=True))
+        held = Pose(self.inertia, world_angles).loads(gravity=gravity).torques
+        return float(np.max(np.abs(held) / self.max_torque))
+
     def _room(self, torques: np.ndarray, hold: np.ndarray, share: float) -> np.ndarray:
         """The ``share`` of each joint's torque left, beyond its ``hold`` load, on the side of
         ``torques``; at least the floor, as for braking."""
@@ -187,6 +206,13 @@ class Servo:
         against = np.where(error > 0.0, down, up)
         floor = BRAKE_FLOOR * self.max_torque / inertia
         brake = BRAKE_SHARE * np.maximum(against, floor)
+        # A joint gravity overloads has no capacity toward its goal at this pose by that count,
+        # yet the others' motion can lend it some (their reaction on it): it asks for as much
+        # as its limit and the load could give either way, and gives way at its limit where
+        # the motion needs more (see fit_drive).
+        overloaded = ~(np.abs(hold.torques) <= self.max_torque)
+        wide = (self.max_torque + np.abs(hold.torques)) / inertia
+        up, down = np.where(overloaded, wide, up), np.where(overloaded, wide, down)
         # Anti-windup: a joint pushing at its limit yet carried away from its goal cannot get
         # there; it asks only to stop, until :meth:`retry`, so it comes to rest where its
         # torque runs out instead of swinging about that point like a pendulum. Carried away
@@ -194,13 +220,15 @@ class Servo:
         # is braking slows down instead, and is no stall. Nor is a joint whose static load
         # leaves it over half its torque toward the goal stalled: the chain's own motion (a
         # long chain's swing) carries it off, and that passes.
-        carried = (
-            np.array(self._pushing)
-            & (velocities * error < 0.0)
-            & (np.abs(velocities) > np.maximum(np.abs(np.array(self._velocities)), STALL_SPEED))
-        )
+        # A joint its static load overloads is carried off at any speed past the creep: braking
+        # at its limit, it sags at a steady speed or even slows, and gets nowhere all the same.
+        load = np.sign(error) * hold.torques
+        speed_now = np.abs(velocities)
+        faster = speed_now > np.maximum(np.abs(np.array(self._velocities)), STALL_SPEED)
+        sagging = (load > self.max_torque) & (speed_now > STALL_SPEED)
+        carried = np.array(self._pushing) & (velocities * error < 0.0) & (faster | sagging)
         carried_for = np.where(carried, np.array(self._carried) + dt, 0.0)
-        loaded = np.sign(error) * hold.torques >= STALL_LOAD * self.max_torque
+        loaded = load >= STALL_LOAD * self.max_torque
         stalled = np.array(self._stalled) | ((carried_for >= STALL_TIME) & loaded)
         self._carried, self._stalled = carried_for.tolist(), stalled.tolist()
         self._velocities = velocities.tolist()
@@ -236,18 +264,24 @@ class Servo:
             return pose.loads(alpha=along(np.where(joints <= k, wanted_acceleration, 0.0)))
 
         head = near if self._sections else None
+
+        def alone(k: int) -> JointLoads:
+            return pose.loads(alpha=along((joints == k).astype(float)))
+
+        weak = (_weak(stalled.tolist(), hold.torques.tolist(), self._limits), alone)
         drive = fit_drive(
             hold + pose.loads(omega=along(velocities)),
             push,
             wanted_acceleration,
             self.max_torque,
             head,
+            weak,
         )
         if not drive.consistent:
             # Moving faster than the motors can hold (after a knock, say): feeding forward the
             # swing's own loads, clipped, would fight the pivots and fling a long chain apart.
             # Gravity and the wanted acceleration alone, and pymunk's pivots find the rest.
-            drive = fit_drive(hold, push, wanted_acceleration, self.max_torque, head)
+            drive = fit_drive(hold, push, wanted_acceleration, self.max_torque, head, weak)
         self._remember(drive.saturated.tolist(), drive.loads.torques.tolist(), error.tolist())
         return ServoCommand(
             rates=velocities + drive.accelerations * dt,
@@ -294,23 +328,27 @@ class Servo:
             u, d = lim - h, lim + h
             u = (0.0 if 0.0 > u else u) / i
             d = (0.0 if 0.0 > d else d) / i
-            up.append(u)
-            down.append(d)
             against = d if e > 0.0 else u
             floor = floor_share * lim / i
             brake = brake_share * (floor if floor > against else against)
+            if not abs(h) <= lim:
+                u = d = (lim + abs(h)) / i
+            up.append(u)
+            down.append(d)
+            load, speed_now = _sign(e) * h, abs(v)
             if (
                 pushing
                 and v * e < 0.0
-                and abs(v) > (stall_speed if stall_speed > (slow := abs(before)) else slow)
+                and (
+                    speed_now > (stall_speed if stall_speed > (slow := abs(before)) else slow)
+                    or (load > lim and speed_now > stall_speed)
+                )
             ):
                 was_carried += dt
             else:
                 was_carried = 0.0
             carried.append(was_carried)
-            is_stalled = was_stalled or (
-                was_carried >= stall_time and _sign(e) * h >= stall_load * lim
-            )
+            is_stalled = was_stalled or (was_carried >= stall_time and load >= stall_load * lim)
             stalled.append(is_stalled)
             size = 0.0 if is_stalled else abs(e)
             by_gain = gain * size
@@ -356,12 +394,18 @@ class Servo:
             return pose.turning([a if j <= k else 0.0 for j, a in enumerate(accelerations)])
 
         head = near if self._sections else None
+        count = len(limits)
+
+        def alone(k: int) -> Loads:
+            return pose.turning([1.0 if j == k else 0.0 for j in range(count)])
+
+        weak = (_weak(stalled, held, limits), alone)
         reached, loads, saturated, consistent = fit_floats(
-            coasting, push, accelerations, limits, head
+            coasting, push, accelerations, limits, head, weak
         )
         if not consistent:
             # See command: gravity and the wanted acceleration alone, pymunk's pivots the rest.
-            reached, loads, saturated, _ = fit_floats(hold, push, accelerations, limits, head)
+            reached, loads, saturated, _ = fit_floats(hold, push, accelerations, limits, head, weak)
         torques = loads[0]
         self._remember(saturated, torques, errors)
         return ServoCommand(
@@ -412,6 +456,13 @@ class _Quiet:
         """True when the loads of joint accelerations whose magnitudes sum to ``total``
         (rad/s^2) surely fit every joint's room for braking; False when they might not."""
         return total <= self._brake
+
+
+def _weak(stalled: list[bool], held: list[float], limits: list[float]) -> list[bool]:
+    """Joints that give way at their torque limit rather than set the chain's one factor (see
+    :func:`~ikgame.control.dynamics.give_way`): those that gave their goal up, and those whose
+    static load (``held``, gravity at the pose) is past their limit."""
+    return [s or not abs(h) <= lim for s, h, lim in zip(stalled, held, limits, strict=True)]
 
 
 def _sign(value: float) -> float:

@@ -38,6 +38,14 @@ once per tick:
 A target beyond the chain's reach gets the chain stretched straight toward it at once, when the
 limits allow that pose (it is the closest any pose can come), with ``FAILURE``.
 
+With :attr:`RobustSolver.strain` set (what holding a pose still takes of the motors, which only
+the caller knows: this package knows no dynamics), a plain answer, arrived or still on its way,
+that takes more than ``STRAINED`` of some motor's limit starts, once the target has held still
+for ``STILL_CALLS`` calls, the same restarts (with
+``HOLD_SEEDS`` random poses), in which only an arrival within ``HOLDS`` counts; the first is
+followed like a far seed's answer. Until one is found the plain answer serves, and once every
+seed has failed it serves for as long as the goal stays.
+
 :meth:`RobustSolver.solve_targets` is the same for a tree and a
 :class:`~ikgame.kinematics.targets.TargetSet`, with the multi-target solvers: the cache, the
 stall test (on the largest distance), the near restarts by damped least squares, then the middle
@@ -82,6 +90,9 @@ __all__ = [
     "STALL_CALLS",
     "SETTLED",
     "STILL_CALLS",
+    "STRAINED",
+    "HOLDS",
+    "HOLD_SEEDS",
 ]
 
 RESTART_BUDGET: Final = 100
@@ -106,6 +117,20 @@ A target that moves every tick makes every search start afresh; a solver that la
 
 RANDOM_SEEDS: Final = 8
 """Random poses (within the limits) tried after the deliberate seeds."""
+
+STRAINED: Final = 1.0
+"""Share of a motor's torque limit past which the motors cannot hold an answer still (see
+:attr:`RobustSolver.strain`): :meth:`RobustSolver.solve` then looks for another."""
+
+HOLDS: Final = 0.95
+"""Share of each motor's torque limit an answer found instead may take to hold still: the rest
+is left to move and to brake with. Below ``STRAINED``, so that the chain, settling near such an
+answer, does not set off another search."""
+
+HOLD_SEEDS: Final = 32
+"""Random poses tried for an answer the motors can hold, when the plain one arrives in a pose
+they cannot: such poses are a narrow share of those that arrive (a tenth, on an arm of four
+links whose motors weaken toward the tip)."""
 
 RANDOM_SEED: Final = 20091
 """Seed of the generator that draws the random restarts, fresh for every search."""
@@ -198,6 +223,10 @@ class RobustSolver:
         self._fallback: Solver = self._solve
         self._solve_targets: TargetSolver = get_target_solver(solver_name)
         self._fallback_targets: TargetSolver = self._solve_targets
+        self.strain: Callable[[np.ndarray], float] | None = None
+        """The largest share of a motor's torque limit that holding a chain's pose (local
+        angles, radians) still takes, if known: an answer past ``STRAINED`` sends
+        :meth:`solve` looking for one within ``HOLDS``."""
         self.solver_name = solver_name
 
     @property
@@ -258,6 +287,7 @@ class RobustSolver:
         self._quiet = 0
         self._pending: _Goal | None = None
         self._waiting = 0
+        self._unheld: _Goal | None = None
 
     def solve(
         self,
@@ -292,6 +322,38 @@ class RobustSolver:
         plain = self._solve(
             self._skeleton, start, goal, max_iterations=max_iterations, tolerance=tol
         )
+        skeleton = self._skeleton
+        target = np.array(goal)
+        strain = self.strain
+        if (
+            plain.status is not SolveStatus.FAILURE
+            and strain is not None
+            and goal != self._unheld
+            and self._waiting >= STILL_CALLS
+            and strain(plain.angles) > STRAINED
+        ):
+            # Still on its way too: a solver that takes many calls to arrive (CCD) would
+            # otherwise bring the end to the target in a pose the motors cannot hold, and the
+            # switch to one they can would carry it away again. Only for a target that holds
+            # still: one that moves would start a search, and pay its budget, on every call.
+            return self._held(
+                plain,
+                goal,
+                target,
+                tol,
+                (
+                    _near_seeds(skeleton, self._solve, skeleton.clamp(start), plain.angles),
+                    _far_seeds(
+                        skeleton,
+                        self._solve,
+                        self._fallback,
+                        plain.angles,
+                        target,
+                        HOLD_SEEDS,
+                    ),
+                ),
+                strain,
+            )
         if plain.status is SolveStatus.SUCCESS:
             # Arriving from where an unfinished search left the chain is that search's answer.
             search = self._search
@@ -299,8 +361,6 @@ class RobustSolver:
                 search is not None and search.aims_at(np.array(goal), tol) and search.best_far
             )
             return self._keep(plain, goal, followed)
-        skeleton = self._skeleton
-        target = np.array(goal)
         return self._recover(
             plain,
             goal,
@@ -472,6 +532,10 @@ class RobustSolver:
             or self._waiting >= STALL_CALLS
         )
         search = self._search
+        if search is not None and search.accept is not None:
+            # A search for a pose the motors can hold counts only such arrivals; a stall takes
+            # any arrival.
+            search = self._search = None
         if search is not None and not search.aims_at(target, tol):
             # The target moved on before the search arrived: wait before the next one.
             search = self._search = None
@@ -501,6 +565,35 @@ class RobustSolver:
             answer = Solution(best.angles, status, iterations, best.error, best.errors)
             return self._keep(answer, goal, best is not plain and search.best_far)
         return Solution(best.angles, SolveStatus.PROCESSING, iterations, best.error, best.errors)
+
+    def _held(
+        self,
+        plain: Solution,
+        goal: tuple[float, float],
+        target: np.ndarray,
+        tol: float,
+        seeds: tuple[_Seeds, _Seeds],
+        strain: Callable[[np.ndarray], float],
+    ) -> Solution:
+        """After a plain solve that arrives in a pose the motors cannot hold: restarts from the
+        seeds of a stall, the first arrival they can hold wins and is followed. While the search
+        goes on the plain answer serves; once it has tried every seed in vain, the plain answer
+        serves for as long as the goal stays."""
+        search = self._search
+        if search is None or search.accept is None or not search.aims_at(target, tol):
+            search = self._search = _Search(
+                *seeds, target, tol, lambda angles: strain(angles) <= HOLDS
+            )
+        search.far = True
+        used = search.run(self._skeleton, target, tol, self.budget)
+        if search.best is not None and search.arrived:
+            error = _error(self._skeleton, search.best, target)
+            answer = Solution(search.best, SolveStatus.SUCCESS, plain.iterations + used, error)
+            return self._keep(answer, goal, followed=True)
+        if search.exhausted:
+            self._unheld = goal
+            self._search = None
+        return replace(plain, iterations=plain.iterations + used)
 
     def _keep(self, solution: Solution, goal: _Goal, followed: bool) -> Solution:
         """Cache ``solution`` (an arrival, or the best there is) and return it read-only."""
@@ -534,10 +627,17 @@ class _Search:
     """
 
     def __init__(
-        self, near: _Seeds, far: _Seeds, target: np.ndarray | TargetSet, tolerance: float
+        self,
+        near: _Seeds,
+        far: _Seeds,
+        target: np.ndarray | TargetSet,
+        tolerance: float,
+        accept: Callable[[np.ndarray], bool] | None = None,
     ) -> None:
         self.target = target.copy() if isinstance(target, np.ndarray) else target
         self.tolerance = tolerance
+        self.accept = accept
+        """Whether an arrival counts (the motors can hold it, say); None: every one does."""
         self.far = False
         self.best: np.ndarray | None = None
         self.best_far = False
@@ -553,6 +653,11 @@ class _Search:
     def exhausted(self) -> bool:
         """True once every seed, far ones included, has been tried."""
         return not self._queue and self._near is None and self._far is None
+
+    @property
+    def arrived(self) -> bool:
+        """True once a restart has arrived (in a pose that counts)."""
+        return self._best_error <= self.tolerance
 
     def aims_at(self, goal: np.ndarray | TargetSet, tolerance: float) -> bool:
         """Whether this search serves ``goal``: the same target, to within the tolerance."""
@@ -592,6 +697,12 @@ class _Search:
                     return used
                 sol = solver(skeleton, angles, goal, max_iterations=allowed, tolerance=tolerance)
                 used += sol.iterations
+                if (
+                    sol.status is SolveStatus.SUCCESS
+                    and self.accept is not None
+                    and not self.accept(sol.angles)
+                ):
+                    break  # it arrives, but not in a pose that counts: the next seed
                 score = self.score(sol)
                 if score < self._best_score or sol.status is SolveStatus.SUCCESS:
                     self.best, self.best_far = sol.angles, far
@@ -652,19 +763,25 @@ def _far_tree_seeds(skeleton: Skeleton, solve: TargetSolver, fallback: TargetSol
     yield from ((pose, both) for pose in _random_poses(skeleton))
 
 
-def _random_poses(skeleton: Skeleton) -> Iterator[np.ndarray]:
-    """``RANDOM_SEEDS`` poses within the limits (within [-pi, pi]), from a fresh generator."""
+def _random_poses(skeleton: Skeleton, count: int = RANDOM_SEEDS) -> Iterator[np.ndarray]:
+    """``count`` poses within the limits (within [-pi, pi]), from a fresh generator."""
     rng = np.random.default_rng(RANDOM_SEED)
     low = np.maximum(skeleton.lower, -math.pi)
     high = np.minimum(skeleton.upper, math.pi)
-    for _ in range(RANDOM_SEEDS):
+    for _ in range(count):
         yield rng.uniform(low, high)
 
 
 def _far_seeds(
-    skeleton: Skeleton, solve: Solver, fallback: Solver, stalled: np.ndarray, target: np.ndarray
+    skeleton: Skeleton,
+    solve: Solver,
+    fallback: Solver,
+    stalled: np.ndarray,
+    target: np.ndarray,
+    drawn: int = RANDOM_SEEDS,
 ) -> _Seeds:
-    """Restarts elsewhere in the joints' ranges, each run by the solver then its fallback."""
+    """Restarts elsewhere in the joints' ranges, each run by the solver then its fallback;
+    ``drawn`` of them random."""
     both = (solve, fallback)
     points = _chain_points(skeleton, stalled)
     for j in range(min(ROUND_JOINTS, skeleton.count)):
@@ -680,7 +797,7 @@ def _far_seeds(
     yield _aimed(skeleton, skeleton.clamp(bends_reversed), target), both
     yield _stretched_toward(skeleton, target), both
     yield _aimed(skeleton, _middle(skeleton), target), both
-    for pose in _random_poses(skeleton):
+    for pose in _random_poses(skeleton, drawn):
         yield _aimed(skeleton, pose, target), both
 
 

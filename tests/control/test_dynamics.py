@@ -354,3 +354,57 @@ def test_parents_must_come_first(parents):
     n = len(parents)
     with pytest.raises(ValueError, match="parents"):
         ChainInertia(np.ones(n), np.ones(n), np.ones(n), parents=np.array(parents))
+
+
+def _three_links_out_sideways():
+    """Three 100 px links of mass 2 held out level in gravity of 2000 px/s^2: the base needs
+    about 1.8e6 to hold them and has 1.2e6."""
+    arm = ChainInertia(np.full(3, 100.0), np.full(3, 2.0), np.full(3, 2.0 * 100.0**2 / 12))
+    pose = Pose(arm, np.zeros(3))
+    limit = np.array([1.2e6, 8.0e5, 4.0e5])
+    wanted = np.array([50.0, -30.0, 20.0])
+    bias = pose.loads(gravity=(0.0, -2000.0))
+    push = pose.loads(alpha=arm.along(wanted))
+    joints = np.arange(3)
+
+    def alone(k):
+        return pose.loads(alpha=arm.along((joints == k).astype(float)))
+
+    return arm, pose, limit, wanted, bias, push, alone
+
+
+def test_a_weak_joint_gives_way_at_its_limit_and_the_others_keep_their_motion():
+    # The base is overloaded by gravity. Without giving way no factor fits (coasting alone is
+    # past its limit), and the others would be left to the physics engine; a weak base gives
+    # way at its limit, its acceleration what that torque gives with the others' motion, and
+    # the others keep theirs whole.
+    arm, pose, limit, wanted, bias, push, alone = _three_links_out_sideways()
+    assert abs(bias.torques[0]) > limit[0]
+    plain = fit_drive(bias, push, wanted, limit)
+    assert not plain.consistent
+    drive = fit_drive(bias, push, wanted, limit, weak=([True, False, False], alone))
+    assert drive.consistent and drive.saturated[0]
+    assert drive.loads.torques[0] == pytest.approx(math.copysign(limit[0], bias.torques[0]))
+    assert drive.accelerations[1:].tolist() == wanted[1:].tolist()
+    assert drive.accelerations[0] < wanted[0]  # less than asked: all its torque gives
+    # The loads are those of the motion: nothing left for the physics engine to reconcile.
+    again = pose.loads(alpha=arm.along(drive.accelerations), gravity=(0.0, -2000.0))
+    np.testing.assert_allclose(again.torques, drive.loads.torques, rtol=1e-9, atol=1e-3)
+    np.testing.assert_allclose(again.forces, drive.loads.forces, rtol=1e-9, atol=1e-6)
+
+
+def test_giving_way_over_floats_gives_the_same_numbers():
+    arm, _, limit, wanted, bias, push, alone = _three_links_out_sideways()
+    fast = FloatInertia(arm).pose(np.zeros(3))
+    weak = [True, False, False]
+    drive = fit_drive(bias, push, wanted, limit, weak=(weak, alone))
+    reached, loads, saturated, consistent = fit_floats(
+        fast.loads(gravity=(0.0, -2000.0)),
+        fast.turning(wanted.tolist()),
+        wanted.tolist(),
+        limit.tolist(),
+        weak=(weak, lambda k: fast.turning(np.eye(3)[k].tolist())),
+    )
+    assert list(reached) == drive.accelerations.tolist()
+    assert loads[0] == drive.loads.torques.tolist()
+    assert saturated == drive.saturated.tolist() and consistent

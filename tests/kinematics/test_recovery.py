@@ -566,3 +566,48 @@ def test_a_moved_tree_is_solved_again():
     assert moved.iterations > 0 and moved.status is SolveStatus.SUCCESS
     reached = _tree_ends(robust.skeleton, moved.angles, easy.links)
     assert np.all(np.hypot(*(reached - easy.points).T) <= TOLERANCE)
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_an_answer_the_motors_cannot_hold_sends_the_solver_to_one_they_can(name):
+    # Only poses with the elbow bent the negative way are light enough for the motors (a
+    # stand-in for gravity's load against the torque limits). From an elbow bent the other
+    # way, every solver's plain answer keeps that bend: the restarts find the other one.
+    arm = Skeleton.chain([100.0, 100.0])
+    robust = RobustSolver(arm, name)
+    robust.strain = lambda angles: 2.0 if angles[1] > 0.0 else 0.5
+    pose, target = np.array([0.3, 0.8]), np.array([120.0, 60.0])
+    for _ in range(2 * STILL_CALLS + 10):
+        sol = robust.solve(pose, target, max_iterations=10, tolerance=TOLERANCE)
+    assert sol.status is SolveStatus.SUCCESS and sol.error <= TOLERANCE
+    assert sol.angles[1] < 0.0
+
+
+def test_when_no_pose_can_be_held_the_plain_answer_serves_without_searching_again():
+    arm = Skeleton.chain([100.0, 100.0])
+    robust = RobustSolver(arm, "dls")
+    robust.strain = lambda angles: 2.0
+    pose, target = np.array([0.3, 0.8]), np.array([120.0, 60.0])
+    iterations = [
+        robust.solve(pose, target, max_iterations=10, tolerance=TOLERANCE).iterations
+        for _ in range(30)
+    ]
+    plain = RobustSolver(arm, "dls").solve(pose, target, max_iterations=10, tolerance=TOLERANCE)
+    assert max(iterations[:5]) > plain.iterations  # it searched
+    assert iterations[-5:] == [plain.iterations] * 5  # and then gave up searching
+
+
+def test_a_moving_target_starts_no_search_for_a_pose_the_motors_can_hold():
+    # A target that moves every call would start a search, and pay its budget, on every call.
+    arm = Skeleton.chain([100.0, 100.0])
+    robust, plain = RobustSolver(arm, "dls"), RobustSolver(arm, "dls")
+    robust.strain = lambda angles: 2.0
+    pose = np.array([0.3, 0.8])
+    for step in range(20):
+        target = np.array([120.0 + 3.0 * step, 60.0])
+        sol = robust.solve(pose, target, max_iterations=10, tolerance=TOLERANCE)
+        assert (
+            sol.iterations
+            == plain.solve(pose, target, max_iterations=10, tolerance=TOLERANCE).iterations
+        )
+        pose = sol.angles
