@@ -10,10 +10,11 @@ limit (rad/s).
 Because the gain is in 1/s, the pose approaches the desired one with time constant ``1 / gain``
 seconds (where the motors have torque to spare) whatever the tick rate.
 
-With a servo, an answer that arrives is solved afresh ``ik_rate`` times a second (a game's frame
-rate), not every tick: in between, the servo drives toward it every tick, carried along with a
-moving target by the same joint rates that carry the chain with it. Anything else (a new target,
-an answer still on its way, a search, a plan round obstacles, a moving base) is solved every tick.
+With a servo, an answer that arrives near the chain is solved afresh ``ik_rate`` times a second
+(a game's frame rate), not every tick: in between, the servo drives toward it every tick,
+carried along with a moving target by the same joint rates that carry the chain with it.
+Anything else (a new target, a chain on its way to a farther answer, an answer still on its way,
+a search, a plan round obstacles, a moving base) is solved every tick.
 """
 
 from __future__ import annotations
@@ -45,8 +46,14 @@ JUMP: Final = 4.0
 jumped rather than moved."""
 
 IK_RATE: Final = 60.0
-"""How often (Hz) a :class:`Controller` with a servo solves afresh for an answer that arrives:
-a game's frame rate. Between solves the servo drives toward the answer every tick."""
+"""How often (Hz) a :class:`Controller` with a servo solves afresh for an answer that arrives
+near the chain: a game's frame rate. Between solves the servo drives toward the answer every
+tick."""
+
+NEAR: Final = 0.05
+"""Radians: an answer within this of the measured pose on every joint is near the chain, and
+solved afresh only :data:`IK_RATE` times a second. One farther off is solved every tick while
+the chain travels to it, as the answer from each pose on the way can differ."""
 
 
 def joint_error(desired: np.ndarray, measured: np.ndarray, limited: np.ndarray) -> np.ndarray:
@@ -360,7 +367,11 @@ class Controller:
         avoider = self.avoider
         if avoider is not None:
             solution = avoider.steer(start, solution, target, self.arrival)
-        settled = solution.status is SolveStatus.SUCCESS and (avoider is None or avoider.idle)
+        settled = (
+            solution.status is SolveStatus.SUCCESS
+            and (avoider is None or avoider.idle)
+            and float(np.abs(solution.angles - start).max()) <= NEAR
+        )
         self._fresh = _Fresh(solution, solution.angles) if settled else None
         return solution
 

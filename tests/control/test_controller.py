@@ -175,6 +175,18 @@ def test_an_answer_that_arrives_is_solved_afresh_at_the_ik_rate_and_a_new_target
     assert len(calls) == before + 24
 
 
+def test_a_chain_on_its_way_to_a_far_answer_is_solved_every_tick():
+    sim = _arm([{"wait": 30.0}])
+    sim.target = (150.0, 150.0)
+    for _ in range(480):
+        sim.step()
+    calls = _count_solves(sim)
+    sim.target = (-150.0, 150.0)
+    for _ in range(20):
+        sim.step()
+    assert len(calls) == 20
+
+
 def test_an_answer_that_does_not_arrive_is_solved_every_tick():
     sim = _arm([{"wait": 30.0}])
     sim.target = (400.0, 0.0)  # out of reach: the chain stretches toward it, failure
