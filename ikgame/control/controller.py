@@ -9,6 +9,12 @@ limit (rad/s).
 
 Because the gain is in 1/s, the pose approaches the desired one with time constant ``1 / gain``
 seconds (where the motors have torque to spare) whatever the tick rate.
+
+With a servo, an answer that arrives near the chain is solved afresh ``ik_rate`` times a second
+(a game's frame rate), not every tick: in between, the servo drives toward it every tick,
+carried along with a moving target by the same joint rates that carry the chain with it.
+Anything else (a new target, a chain on its way to a farther answer, an answer still on its way,
+a search, a plan round obstacles, a moving base) is solved every tick.
 """
 
 from __future__ import annotations
@@ -38,6 +44,16 @@ __all__ = ["Command", "Controller", "joint_error"]
 JUMP: Final = 4.0
 """A target whose motion would need joint rates over this many times their speed limits has
 jumped rather than moved."""
+
+IK_RATE: Final = 60.0
+"""How often (Hz) a :class:`Controller` with a servo solves afresh for an answer that arrives
+near the chain: a game's frame rate. Between solves the servo drives toward the answer every
+tick."""
+
+NEAR: Final = 0.05
+"""Radians: an answer within this of the measured pose on every joint is near the chain, and
+solved afresh only :data:`IK_RATE` times a second. One farther off is solved every tick while
+the chain travels to it, as the answer from each pose on the way can differ."""
 
 
 def joint_error(desired: np.ndarray, measured: np.ndarray, limited: np.ndarray) -> np.ndarray:
@@ -90,6 +106,7 @@ class Controller:
         arrival: float = 0.5,
         servo: Servo | None = None,
         avoider: Avoider | None = None,
+        ik_rate: float | None = IK_RATE,
     ) -> None:
         # Stalls (limits, coils, the long way round a stop) are recovered from, and a settled
         # chain's answer is cached, by one solver object that lives with the chain.
@@ -108,8 +125,22 @@ class Controller:
         self._all_limited = bool(self._limited.all())
         self._held: np.ndarray | None = None
         self._holding = False
-        self._last_target: np.ndarray | None = None
+        self._last_target: np.ndarray | TargetSet | None = None
         self._gravity: tuple[float, float] | None = None
+        self.ik_rate = ik_rate
+        self._fresh: _Fresh | None = None
+
+    @property
+    def ik_rate(self) -> float | None:
+        """How often (Hz) an answer that arrives is solved afresh (see the module); None solves
+        every tick."""
+        return self._ik_rate
+
+    @ik_rate.setter
+    def ik_rate(self, value: float | None) -> None:
+        if value is not None and not (math.isfinite(value) and value > 0):
+            raise ValueError(f"ik_rate must be a positive number (Hz) or None, got {value!r}")
+        self._ik_rate = None if value is None else float(value)
 
     @property
     def gain(self) -> float:
@@ -132,6 +163,7 @@ class Controller:
     @skeleton.setter
     def skeleton(self, skeleton: Skeleton) -> None:
         self.solver.skeleton = skeleton
+        self._fresh = None
         # The damping of the target's pseudo-inverse (see _goal_rates), px^2, per chain.
         self._damping = (0.01 * skeleton.reach) ** 2
         self._lengths = skeleton.lengths.tolist()
@@ -146,6 +178,7 @@ class Controller:
     def set_solver(self, name: str) -> None:
         """Switch solver from the next tick on (``ccd``, ``jacobian_transpose``, ``dls``, ``fabrik``)."""
         self.solver.solver_name = name
+        self._fresh = None
 
     def _goal_rates(
         self,
@@ -153,8 +186,9 @@ class Controller:
         target: np.ndarray | TargetSet | None,
         dt: float,
         base_motion: tuple[np.ndarray, float] | None,
-    ) -> np.ndarray | None:
-        """Joint rates (rad/s) that carry the end effectors along with moving targets.
+    ) -> tuple[np.ndarray | None, bool]:
+        """Joint rates (rad/s) that carry the end effectors along with moving targets, and
+        whether a target jumped.
 
         The least-norm rates for the targets' velocities relative to the base (a damped
         pseudo-inverse of the stacked Jacobian), so the chain moves with its targets, and holds
@@ -166,9 +200,9 @@ class Controller:
         """
         previous, self._last_target = self._last_target, target
         if target is None or previous is None:
-            return None
+            return None, False
         if isinstance(target, TargetSet) != isinstance(previous, TargetSet):
-            return None
+            return None, True
         skeleton = self.skeleton
         if (
             not isinstance(target, TargetSet)
@@ -178,7 +212,7 @@ class Controller:
             return self._chain_rates(measured, target, previous, dt, base_motion)
         if isinstance(target, TargetSet):
             if not np.array_equal(previous.links, target.links):
-                return None
+                return None, True
             points, links = target.points, target.links
             velocity = (target.points - previous.points) / dt
         else:
@@ -190,7 +224,7 @@ class Controller:
             arms = points - skeleton.base
             velocity = velocity - base_velocity - spin * np.column_stack((-arms[:, 1], arms[:, 0]))
         if not velocity.any():
-            return None
+            return None, False
         if links is None:
             arms = jacobian(skeleton, measured)
         else:
@@ -206,7 +240,8 @@ class Controller:
         worst = np.zeros(skeleton.count)
         np.maximum.at(worst, roots, over)
         per_link = worst[roots]
-        return np.where(per_link > JUMP, 0.0, rates / np.maximum(per_link, 1.0))
+        jumped = per_link > JUMP
+        return np.where(jumped, 0.0, rates / np.maximum(per_link, 1.0)), bool(jumped.any())
 
     def _chain_rates(
         self,
@@ -215,7 +250,7 @@ class Controller:
         previous: np.ndarray,
         dt: float,
         base_motion: tuple[np.ndarray, float] | None,
-    ) -> np.ndarray | None:
+    ) -> tuple[np.ndarray | None, bool]:
         """:meth:`_goal_rates` of a short chain's tip over floats, the same numbers: the 2x2
         system in closed form (np.linalg.solve and the checked Jacobian cost more than the
         system itself), one branch to scale, and no numpy call on two or ten numbers."""
@@ -227,7 +262,7 @@ class Controller:
             (bvx, bvy), spin = base_motion[0].tolist(), base_motion[1]
             vx, vy = vx - bvx - spin * -(ty - by), vy - bvy - spin * (tx - bx)
         if not (vx or vy):
-            return None
+            return None, False
         rates = damped_rates(
             self._lengths,
             (bx, by),
@@ -244,9 +279,9 @@ class Controller:
             if over > worst or over != over:
                 worst = over
         if worst > JUMP:
-            return np.zeros(len(rates))
+            return np.zeros(len(rates)), True
         scale = 1.0 if worst <= 1.0 else worst
-        return np.array([rate / scale for rate in rates])
+        return np.array([rate / scale for rate in rates]), False
 
     def _know_strain(self, gravity: tuple[float, float] | np.ndarray) -> None:
         """Tell a chain's solver what holding a pose still under ``gravity`` (px/s^2) takes of
@@ -268,6 +303,7 @@ class Controller:
         stalled motor only grinds."""
         self._held = self.skeleton.clamp(np.asarray(measured, dtype=float).copy())
         self._holding = True
+        self._fresh = None
         # A cached answer is one the chain could not get to: solve afresh when released.
         self.solver.reset()
         if self.avoider is not None:
@@ -276,6 +312,7 @@ class Controller:
     def release(self) -> None:
         """Solve toward the target again after :meth:`hold`."""
         self._holding = False
+        self._fresh = None
 
     @property
     def holding(self) -> bool:
@@ -301,43 +338,85 @@ class Controller:
         (rad/s). With no target the chain holds the last pose it was asked for (or its current
         one).
         """
+        servo = self.servo
+        if servo is not None and (velocities is None or dt is None):
+            raise ValueError("a controller with a servo needs the joint velocities and dt")
+        goal_rates, jumped, moved = None, False, False
+        if servo is not None:
+            self._know_strain(gravity)
+            moved = target is not None and _moved(target, self._last_target)
+            goal_rates, jumped = self._goal_rates(measured, target, dt, base_motion)
         if target is None or self._holding:
+            self._fresh = None
             if self._held is None:
                 self._held = self.skeleton.clamp(measured.copy())
             solution = Solution(self._held, SolveStatus.SUCCESS, 0, 0.0)
         else:
-            if self._all_limited:
-                start = np.array(measured, dtype=float)  # nothing to wrap
-            else:
-                wrapped = [wrap_angle(a) for a in np.asarray(measured, dtype=float).tolist()]
-                start = np.where(self._limited, measured, wrapped)
-            solve = (
-                self.solver.solve_targets if isinstance(target, TargetSet) else self.solver.solve
-            )
-            solution = solve(start, target, max_iterations=self.iterations, tolerance=self.arrival)
-            if self.avoider is not None:
-                solution = self.avoider.steer(start, solution, target, self.arrival)
+            solution = None
+            if servo is not None and base_motion is None and not jumped:
+                solution = self._reuse(moved, goal_rates, dt)
+            if solution is None:
+                solution = self._solve(measured, target)
             self._held = solution.angles
         error = joint_error(solution.angles, measured, self._limited)
-        if self.servo is None:
+        if servo is None:
             rates = np.clip(self.gain * error, -self.max_speed, self.max_speed)
             return Command(solution, rates)
-        if velocities is None or dt is None:
-            raise ValueError("a controller with a servo needs the joint velocities and dt")
-        self._know_strain(gravity)
-        moved = target is not None and _moved(target, self._last_target)
         if moved:
             # The goal may be within the torque budget now: stalled joints try again.
-            self.servo.retry()
-        drive = self.servo.command(
-            error,
-            self.skeleton.world_angles(measured),
-            velocities,
-            gravity,
-            dt,
-            self._goal_rates(measured, target, dt, base_motion),
+            servo.retry()
+        drive = servo.command(
+            error, self.skeleton.world_angles(measured), velocities, gravity, dt, goal_rates
         )
         return Command(solution, drive.rates, drive)
+
+    def _solve(self, measured: np.ndarray, target: np.ndarray | TargetSet) -> Solution:
+        """The solver's answer from the ``measured`` pose, steered clear of obstacles; an
+        answer that arrives is kept to be driven toward until the next solve."""
+        if self._all_limited:
+            start = np.array(measured, dtype=float)  # nothing to wrap
+        else:
+            wrapped = [wrap_angle(a) for a in np.asarray(measured, dtype=float).tolist()]
+            start = np.where(self._limited, measured, wrapped)
+        solve = self.solver.solve_targets if isinstance(target, TargetSet) else self.solver.solve
+        solution = solve(start, target, max_iterations=self.iterations, tolerance=self.arrival)
+        avoider = self.avoider
+        if avoider is not None:
+            solution = avoider.steer(start, solution, target, self.arrival)
+        settled = (
+            solution.status is SolveStatus.SUCCESS
+            and (avoider is None or avoider.idle)
+            and float(np.abs(solution.angles - start).max()) <= NEAR
+        )
+        self._fresh = _Fresh(solution, solution.angles) if settled else None
+        return solution
+
+    def _reuse(self, moved: bool, goal_rates: np.ndarray | None, dt: float) -> Solution | None:
+        """The last answer that arrived, while it is not yet time to solve afresh (see
+        :data:`IK_RATE`), carried along with a moving target by ``goal_rates`` (rad/s); None
+        when it must be solved now."""
+        fresh = self._fresh
+        if fresh is None or self._ik_rate is None:
+            return None
+        fresh.ticks += 1
+        if fresh.ticks * dt * self._ik_rate > 1.0 - 1e-9:
+            return None
+        if moved:
+            if goal_rates is None:
+                return None
+            fresh.angles = self.skeleton.clamp(fresh.angles + goal_rates * dt)
+        answer = fresh.solution
+        return Solution(fresh.angles, SolveStatus.SUCCESS, 0, answer.error, answer.errors)
+
+
+@dataclass(eq=False)
+class _Fresh:
+    """An answer that arrived, where a moving target has carried it since (radians) and the
+    ticks since it was solved."""
+
+    solution: Solution
+    angles: np.ndarray
+    ticks: int = 0
 
 
 def _moved(target: np.ndarray | TargetSet, last: np.ndarray | TargetSet | None) -> bool:

@@ -963,6 +963,12 @@ class Avoider:
         """True while a search is spread over calls (the chain waits, see the class)."""
         return self._search is not None
 
+    @property
+    def idle(self) -> bool:
+        """True when the solver's answer is commanded as it is: no search, and no plan being
+        followed (each call then only checks the answer and the way to it)."""
+        return self._search is None and self._goal is None
+
     def steer(
         self,
         measured: np.ndarray,

@@ -481,7 +481,7 @@ class ChainConfig(_Model):
     base: Vec2 = Field((0.0, 0.0), description="Base position, px.")
     angle: Degrees = Field(90.0, description="Direction of the base mount, degrees (90 = up).")
     solver: SolverName = Field("ccd", description="IK solver.")
-    iterations: int = Field(10, ge=1, le=1000, description="Solver iterations per tick.")
+    iterations: int = Field(10, ge=1, le=1000, description="Solver iterations per solve.")
     arrival: float = Field(
         0.5, ge=0, le=1000, allow_inf_nan=False, description="Solver arrival distance, px."
     )

@@ -114,10 +114,111 @@ def test_branches_on_the_base_follow_their_targets_each_at_its_own_speed():
     dt = 1 / 240
     alone = Controller(legs, "dls", max_speed=np.full(4, 3.0))
     alone._goal_rates(angles, TargetSet([1], feet[:1]), dt, carried)
-    planted = alone._goal_rates(angles, TargetSet([1], feet[:1]), dt, carried)
+    planted, _ = alone._goal_rates(angles, TargetSet([1], feet[:1]), dt, carried)
     for sweep, fastest in ((2.0, 3.0), (20.0, 0.0)):  # px a tick: fast, then a jump
         controller._goal_rates(angles, before, dt, carried)
         after = TargetSet([1, 3], feet + [(0.0, 0.0), (sweep, 0.0)])
-        rates = controller._goal_rates(angles, after, dt, carried)
+        rates, jumped = controller._goal_rates(angles, after, dt, carried)
         assert rates[:2] == pytest.approx(planted[:2], rel=1e-3)
         assert np.abs(rates[2:]).max() == pytest.approx(fastest)
+        assert jumped == (fastest == 0.0)
+
+
+def _arm(script, **chain):
+    from ikgame.level.model import Level
+    from ikgame.sim import Simulation
+
+    link = {"length": 100.0, "mass": 1.0, "limits": [-150.0, 150.0], "max_torque": 4.0e6}
+    level = Level.model_validate(
+        {
+            "level": {"name": "ik rate", "duration": 30.0},
+            "world": {"gravity": [0.0, -900.0], "tick_rate": 240},
+            "chain": {"angle": 90.0, "links": [{**link, "repeat": 3}], **chain},
+            "script": script,
+        }
+    )
+    return Simulation(level, record=False)
+
+
+def _count_solves(sim):
+    calls = []
+    solve = sim.controller.solver.solve
+
+    def counted(*args, **kwargs):
+        calls.append(sim.tick)
+        return solve(*args, **kwargs)
+
+    sim.controller.solver.solve = counted
+    return calls
+
+
+def test_an_answer_that_arrives_is_solved_afresh_at_the_ik_rate_and_a_new_target_at_once():
+    sim = _arm([{"wait": 30.0}])
+    sim.target = (150.0, 150.0)
+    for _ in range(480):
+        sim.step()
+    calls = _count_solves(sim)
+    for _ in range(240):
+        sim.step()
+    assert len(calls) == 60  # 60 Hz at 240 ticks/s: one tick in four
+    for phase in range(4):
+        sim.target = (-120.0, 160.0) if phase % 2 == 0 else (150.0, 150.0)
+        before = len(calls)
+        sim.step()
+        assert len(calls) == before + 1  # whatever the tick, a new target is solved on it
+        for _ in range(phase):
+            sim.step()
+    sim.controller.ik_rate = None
+    before = len(calls)
+    for _ in range(24):
+        sim.step()
+    assert len(calls) == before + 24
+
+
+def test_a_chain_on_its_way_to_a_far_answer_is_solved_every_tick():
+    sim = _arm([{"wait": 30.0}])
+    sim.target = (150.0, 150.0)
+    for _ in range(480):
+        sim.step()
+    calls = _count_solves(sim)
+    sim.target = (-150.0, 150.0)
+    for _ in range(20):
+        sim.step()
+    assert len(calls) == 20
+
+
+def test_an_answer_that_does_not_arrive_is_solved_every_tick():
+    sim = _arm([{"wait": 30.0}])
+    sim.target = (400.0, 0.0)  # out of reach: the chain stretches toward it, failure
+    for _ in range(240):
+        sim.step()
+    calls = _count_solves(sim)
+    for _ in range(40):
+        sim.step()
+    assert sim.last_tick.solver_status == "failure"
+    assert len(calls) == 40
+
+
+def test_between_solves_the_answer_moves_with_a_moving_target():
+    # A target sweeping at 180 px/s (after its one-second lead-in): an answer held still for
+    # the three ticks between solves would lag 0.75 px more each tick; carried by the rates
+    # that carry the chain with the target, it is as near the target three ticks on as when it
+    # was solved.
+    sim = _arm([{"follow": "line", "from": [-90.0, 200.0], "to": [90.0, 200.0], "duration": 1.0}])
+    skeleton = sim.controller.skeleton
+    off: dict[int, list[float]] = {0: [], 3: []}
+    for _ in range(470):
+        sim.step()
+        fresh = sim.controller._fresh
+        if sim.tick > 250 and fresh is not None and fresh.ticks in off:
+            tip = forward_kinematics(skeleton, sim.controller._held)[0][-1]
+            off[fresh.ticks].append(float(np.hypot(*(tip - sim.targets["tip"]))))
+    assert len(off[0]) > 40 and len(off[3]) > 40
+    assert np.mean(off[3]) < np.mean(off[0]) + 0.25
+
+
+def test_ik_rate_must_be_positive_or_none():
+    skeleton = Skeleton.chain([100.0])
+    with pytest.raises(ValueError, match="ik_rate"):
+        Controller(skeleton, "ccd", max_speed=np.ones(1), ik_rate=0.0)
+    assert Controller(skeleton, "ccd", max_speed=np.ones(1), ik_rate=None).ik_rate is None
