@@ -29,7 +29,8 @@ width). A chain aims its end effector at a point; a tree aims a
   far the links can sweep between them is clear without sampling. A route that takes the
   targeted ends past the target and back is cut where they come nearest it. An
   :class:`Avoider` remembers the last route of several pieces it took up: a chain still at its
-  end is first routed back along it (the way out of a narrow passage is the way in).
+  end for which the trees find no way is routed back along it (the way out of a narrow passage
+  is the way in).
 
 :class:`Avoider` does this tick by tick for a controller: it takes the solver's answer and
 returns the pose to command, keeping the clear answer and the route for the target until it
@@ -667,16 +668,14 @@ class Clearance:
     ) -> _Work[list[np.ndarray] | None]:
         """:meth:`route` in steps of work (see :class:`Avoider`); with ``back``, poses each
         reached from the one before in a clear straight line (an earlier route walked back),
-        the way along them is tried before any tree is grown (see :meth:`_retracing`)."""
+        the way along them is tried when the trees find none (see :meth:`_retracing`)."""
         start = np.asarray(start, float)
         goal = np.asarray(goal, float)
         if (yield from self._checking(start, goal)):
             return [goal]
-        found = None
-        if back:
+        found = yield from self._connect(start, goal)
+        if found is None and back:
             found = yield from self._retracing(start, goal, back)
-        if found is None:
-            found = yield from self._connect(start, goal)
         if found is None:
             return None
         # Greedy shortcuts: from each pose, the farthest one reachable in a clear straight line.
@@ -702,7 +701,9 @@ class Clearance:
         A chain that came in through a narrow passage (the last links threaded under a rock, in a
         band a few px wider than they are) rests at the end of the route that led it in, and
         the way out is that route walked back: random trees in joint space seldom find it again
-        (on ``27_round_rock`` none did in a search of 107,000 units of work)."""
+        (on ``27_round_rock`` none did in a search of 107,000 units of work). It is tried only
+        when they find none: where they find a way it is the shorter one (back along the route
+        the chain came by, it reached the next target of ``07_target_on_base`` 0.09 s later)."""
         if self.swept(start, back[0]) > AHEAD:
             return None
         here, via = start, []
