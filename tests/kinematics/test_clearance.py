@@ -288,6 +288,94 @@ def test_a_chain_hooked_round_a_shelfs_end_gets_a_way_in_under_it_within_half_a_
     assert room.misses(arrived, target)[0] <= 0.5
 
 
+def _rock_room() -> Clearance:
+    """Three 100 px links mounted straight up, a floor 20 px below the base and a round rock
+    (radius 45 px) to the right whose bottom is 35 px above the floor (the stress level round a
+    rock)."""
+    arm = Skeleton.chain([100.0] * 3, base_angle=UP, limits=[(-2.618, 2.618)] * 3)
+    obstacles = Obstacles.from_arrays(
+        np.array([[-700.0, -20.0, 700.0, -20.0, 4.0]]), np.array([[170.0, 60.0, 45.0]])
+    )
+    return Clearance(arm, np.full(3, 6.0), obstacles)
+
+
+UP_LEFT = np.array([0.006, 0.029, 1.23])
+"""The end up to the left, the arm standing."""
+
+UNDER = np.array([-0.994, -1.227, 0.913])
+"""The end low beyond the rock: the middle link passes its lower left, the last runs under it
+through the 35 px between rock and floor."""
+
+WAY_IN = [
+    *(
+        np.array(pose)
+        for pose in (
+            [0.77, -1.96, -0.76],
+            [0.74, -2.02, -0.79],
+            [0.68, -2.17, -0.64],
+            [0.44, -2.32, -0.4],
+            [-0.28, -2.08, 0.47],
+            [-0.67, -1.69, 0.65],
+        )
+    ),
+    UNDER,
+]
+"""Via poses from ``UP_LEFT`` to ``UNDER``, each reached from the one before in a clear straight
+line (traced on a grid of joint space): the end comes down the rock's left side and slides
+right along the floor under it."""
+
+
+def test_the_way_in_under_the_rock_is_found_from_the_arm_standing():
+    # A narrow passage that random trees in joint space seldom sample: the search needs more
+    # than 1,500 of their nodes.
+    room = _rock_room()
+    assert room.is_clear(UNDER) and not room.path_clear(UP_LEFT, UNDER)
+    way = room.route(UP_LEFT, UNDER)
+    assert way is not None
+    assert np.array_equal(way[-1], UNDER)
+    for a, b in zip([UP_LEFT, *way], way, strict=False):
+        assert room.path_clear(a, b)
+
+
+def test_a_chain_led_in_under_the_rock_is_led_out_the_way_it_came(monkeypatch):
+    room = _rock_room()
+    way_in = WAY_IN
+    assert all(room.path_clear(a, b) for a, b in zip([UP_LEFT, *way_in], way_in, strict=False))
+    searched = []
+
+    def only_the_way_in(self, a, b):
+        # The trees found the way in; back out, from the last links under the rock, they find
+        # none (none in 1,500 nodes on the stress level).
+        searched.append(b)
+        yield ITERATION_UNITS
+        return [pose.copy() for pose in way_in] if np.array_equal(b, UNDER) else None
+
+    monkeypatch.setattr(Clearance, "_connect", only_the_way_in)
+    guide = Avoider(room)
+    beyond = room.points(UNDER)[-1]
+    inside = _move_as_told(
+        guide, UP_LEFT, Solution(UNDER, SolveStatus.SUCCESS, 1, 0.0), beyond, 400
+    )
+    assert room.misses(inside, beyond)[0] <= 0.5
+    up = room.points(UP_LEFT)[-1]
+    out = _move_as_told(guide, inside, Solution(UP_LEFT, SolveStatus.SUCCESS, 1, 0.0), up, 400)
+    assert room.misses(out, up)[0] <= 0.5
+    assert len(searched) == 2  # the trees found no way out: it is the way in walked back
+
+
+def test_a_chain_away_from_the_end_of_its_last_route_is_not_sent_back_along_it():
+    room = _rock_room()
+    back = [*WAY_IN[::-1], UP_LEFT]
+    near = UNDER + 0.01
+    way = _finish(room._retracing(near, UP_LEFT, back))
+    assert way is not None and np.array_equal(way[0], UNDER) and np.array_equal(way[-1], UP_LEFT)
+    # A chain that has left the end of the route is not sent back to it on its way elsewhere,
+    # however clear the lines to it and on from it.
+    beside, on = WAY_IN[0], WAY_IN[1]
+    assert room.path_clear(UP_LEFT, beside) and room.path_clear(beside, on)
+    assert _finish(room._retracing(UP_LEFT, on, [beside, UP_LEFT])) is None
+
+
 def test_on_a_route_the_chain_is_sent_along_its_line_just_ahead_of_its_slowest_joint():
     room = _shelf_room()
     guide = Avoider(room)
