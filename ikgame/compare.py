@@ -98,7 +98,8 @@ class SolverRun:
         iterations_per_tick: mean solver iterations per solver call.
         torque_limited: share of joint-ticks with the motor at its torque limit (0..1): where the
             physics, not the solver, set the pace.
-        solver_calls: how many times the solver was called (once per tick with a target).
+        solver_calls: how many times the solver was called (each tick with a target; 60 times a
+            second once an answer arrives near the chain, see ``Controller.ik_rate``).
         solver_us_per_tick: mean wall-clock time of one solver call, microseconds; varies from
             run to run (None without a call).
         times: (ticks,) simulated time at the end of each tick, s (a diverged run keeps the

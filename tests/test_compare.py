@@ -83,7 +83,9 @@ def test_metrics_are_finite_and_sensible(comparison):
         assert run.path_length >= straight - TOLERANCE, run.solver
         assert math.isfinite(run.mean_squared_jerk) and run.mean_squared_jerk >= 0.0
         assert run.tracking_error is None  # no follow step in this level
-        assert run.solver_calls == run.ticks  # a target every tick
+        # A target every tick: solved on each, or on every other tick (60 Hz at 120 ticks/s)
+        # while the answer has arrived near the chain.
+        assert math.ceil(run.ticks / 2) <= run.solver_calls <= run.ticks
         assert run.iterations_per_tick >= 0.0
         assert 0.0 <= run.torque_limited <= 1.0
         assert run.solver_us_per_tick is not None and run.solver_us_per_tick > 0.0
@@ -148,7 +150,8 @@ def test_ticks_without_a_target_break_the_error_line_and_skip_the_solver():
     )
     run = compare_level(level, ["ccd"]).runs[0]
     assert np.isnan(run.errors[:30]).all() and np.isfinite(run.errors[-1])
-    assert run.solver_calls == run.ticks - 30
+    # No call in the 30 ticks without a target; one every tick or every other after them.
+    assert math.ceil((run.ticks - 30) / 2) <= run.solver_calls <= run.ticks - 30
 
 
 def test_a_follow_step_gives_a_tracking_error_and_a_target_trail():
