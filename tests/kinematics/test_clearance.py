@@ -223,16 +223,20 @@ def test_clear_answer_reaches_under_the_shelf_and_gives_up_inside_an_obstacle():
     assert room.clear_answer(measured, measured, inside_the_shelf, 0.5) is None
 
 
+def _assert_clear_route(room, start, goal, way):
+    """``way`` ends on ``goal`` and each of its straight pieces from ``start`` on is clear."""
+    assert way is not None
+    assert np.array_equal(way[-1], goal)
+    for a, b in zip([start, *way], way, strict=False):
+        assert room.path_clear(a, b)
+
+
 def test_route_goes_round_the_shelf_in_clear_straight_pieces():
     room = _shelf_room()
     start = np.array([0.5, 0.3, 0.2])  # up-left
     goal = room.clear_answer(start, start, np.array([290.0, 45.0]), 0.5)
     assert not room.path_clear(start, goal)  # straight there sweeps the arm through the shelf
-    way = room.route(start, goal)
-    assert way is not None
-    assert np.array_equal(way[-1], goal)
-    for a, b in zip([start, *way], way, strict=False):
-        assert room.path_clear(a, b)
+    _assert_clear_route(room, start, goal, room.route(start, goal))
 
 
 def test_a_clear_answer_no_way_leads_to_is_traded_for_a_clear_answer_of_the_seeds(monkeypatch):
@@ -330,11 +334,7 @@ def test_the_way_in_under_the_rock_is_found_from_the_arm_standing():
     # than 1,500 of their nodes.
     room = _rock_room()
     assert room.is_clear(UNDER) and not room.path_clear(UP_LEFT, UNDER)
-    way = room.route(UP_LEFT, UNDER)
-    assert way is not None
-    assert np.array_equal(way[-1], UNDER)
-    for a, b in zip([UP_LEFT, *way], way, strict=False):
-        assert room.path_clear(a, b)
+    _assert_clear_route(room, UP_LEFT, UNDER, room.route(UP_LEFT, UNDER))
 
 
 def test_a_chain_led_in_under_the_rock_is_led_out_the_way_it_came(monkeypatch):
