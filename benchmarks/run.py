@@ -66,9 +66,7 @@ def _env() -> dict[str, str]:
     """The environment for child processes, with this checkout importable, reading the bytecode
     that :func:`_compile_bytecode` wrote."""
     paths = [str(ROOT), *filter(None, [os.environ.get("PYTHONPATH")])]
-    env = os.environ | {"PYTHONPATH": os.pathsep.join(paths)}
-    env.pop("PYTHONPYCACHEPREFIX", None)
-    return env
+    return os.environ | {"PYTHONPATH": os.pathsep.join(paths)}
 
 
 def _compile_bytecode() -> None:

@@ -383,8 +383,11 @@ class Controller:
         avoider = self.avoider
         if avoider is not None:
             solution = avoider.steer(start, solution, target, self.arrival)
+        # Only a servo's answers are driven toward between solves (see _reuse).
         settled = (
-            solution.status is SolveStatus.SUCCESS
+            self.servo is not None
+            and self._ik_rate is not None
+            and solution.status is SolveStatus.SUCCESS
             and (avoider is None or avoider.idle)
             and float(np.abs(solution.angles - start).max()) <= NEAR
         )
