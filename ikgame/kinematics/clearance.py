@@ -1213,9 +1213,10 @@ class Avoider:
         # A route round an obstacle is remembered from where it started: the next target's way
         # can be the same way back.
         self._traveled = [search.start, *self._way] if len(self._way) > 1 else []
-        # A route round an obstacle is followed piece by piece on its checked lines; a straight
-        # way to the goal is commanded whole.
-        self._origin = measured.copy() if len(self._way) > 1 else None
+        # Every plan is followed piece by piece on its checked lines, a straight way to the goal
+        # too: sent to a far goal in one go, the joints with far to turn lag the others, and the
+        # ends can come onto the target with a joint still far off, and swing on past it.
+        self._origin = measured.copy()
         moved = not np.array_equal(measured, search.start)
         if moved and not self._clear_way(measured, self._way[0]):
             # The chain went on (along an earlier plan, or drifting while it held) and the
@@ -1314,7 +1315,7 @@ class Avoider:
         """The pose to head for: the next via pose once the chain, near the current one (within
         ``AHEAD`` px of sweep), can turn to it in a clear straight line, or once it rests on the
         current one (within ``SETTLED``: each piece is clear from its start, and the chain is
-        there). On a route round an obstacle, a pose on the piece's line at most ``LEAD``
+        there). Not the via pose itself, but the pose on the piece's line at most ``LEAD``
         radians ahead of the joint that has come the least far along it (see :meth:`_lead`)."""
         room = self.clearance
         way = self._way
@@ -1322,14 +1323,13 @@ class Avoider:
             near = room.swept(measured, way[0]) <= AHEAD
             if near and room.path_clear(measured, way[1]):
                 del way[0]
-                self._origin = None if self._origin is None else measured.copy()
+                self._origin = measured.copy()
             elif np.abs(measured - way[0]).max() <= SETTLED:
-                passed = way.pop(0)
-                self._origin = None if self._origin is None else passed
+                self._origin = way.pop(0)
             else:
                 break
         status = SolveStatus.PROCESSING if len(way) > 1 else solution.status
-        pose = way[0] if self._origin is None else self._lead(measured, self._origin, way[0])
+        pose = self._lead(measured, self._origin, way[0])
         return Solution(pose, status, solution.iterations, solution.error)
 
     @staticmethod
