@@ -36,8 +36,9 @@ width). A chain aims its end effector at a point; a tree aims a
 returns the pose to command, keeping the clear answer and the route for the target until it
 moves, so they are searched once, and spreading each search over ticks by a budget of counted
 work (``SEARCH_BUDGET``) so that no tick carries a whole one; a chain at rest or in the open
-costs two products of the links' levers a tick. A route of several pieces is followed on its
-lines, each pose commanded at most ``LEAD`` ahead of the joint that has come least far.
+costs two products of the links' levers a tick. A route is followed on its lines (a straight
+way to the goal too), each pose commanded at most ``LEAD`` ahead of the joint that has come
+least far.
 While the base moves it plans nothing (a plan would be stale by the next tick): it only holds
 off an obstacle the links the solver's answers bring nearer it, polishing the pose it commanded
 onto the target for where the base is now. An answer arrives when every targeted end is within
