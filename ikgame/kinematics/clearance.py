@@ -1021,6 +1021,14 @@ class Avoider:
         a tree's :class:`~ikgame.kinematics.targets.TargetSet` (kept until any of its points
         moves)."""
         self._unchecked = False
+        last = self._commanded
+        free = ~self.clearance.skeleton.limited
+        if self._way and last is not None and free.any():
+            # A free joint is measured within [-pi, pi], but a planned line can run on past a
+            # half turn (round an obstacle the long way): it is read as the turn nearest the
+            # pose commanded last, or the chain would be taken for back at the line's start.
+            turned = last + np.remainder(measured - last + math.pi, 2.0 * math.pi) - math.pi
+            measured = np.where(free, turned, measured)
         steered = self._steer(measured, solution, target, tolerance)
         # The solver's answer handed on unchecked is no pose to wait at.
         self._commanded = None if self._unchecked else steered.angles
