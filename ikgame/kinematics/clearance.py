@@ -36,8 +36,9 @@ width). A chain aims its end effector at a point; a tree aims a
 returns the pose to command, keeping the clear answer and the route for the target until it
 moves, so they are searched once, and spreading each search over ticks by a budget of counted
 work (``SEARCH_BUDGET``) so that no tick carries a whole one; a chain at rest or in the open
-costs two products of the links' levers a tick. A route of several pieces is followed on its
-lines, each pose commanded at most ``LEAD`` ahead of the joint that has come least far.
+costs two products of the links' levers a tick. A route is followed on its lines (a straight
+way to the goal too), each pose commanded at most ``LEAD`` ahead of the joint that has come
+least far.
 While the base moves it plans nothing (a plan would be stale by the next tick): it only holds
 off an obstacle the links the solver's answers bring nearer it, polishing the pose it commanded
 onto the target for where the base is now. An answer arrives when every targeted end is within
@@ -1020,6 +1021,14 @@ class Avoider:
         a tree's :class:`~ikgame.kinematics.targets.TargetSet` (kept until any of its points
         moves)."""
         self._unchecked = False
+        last = self._commanded
+        free = ~self.clearance.skeleton.limited
+        if self._way and last is not None and free.any():
+            # A free joint is measured within [-pi, pi], but a planned line can run on past a
+            # half turn (round an obstacle the long way): it is read as the turn nearest the
+            # pose commanded last, or the chain would be taken for back at the line's start.
+            turned = last + np.remainder(measured - last + math.pi, 2.0 * math.pi) - math.pi
+            measured = np.where(free, turned, measured)
         steered = self._steer(measured, solution, target, tolerance)
         # The solver's answer handed on unchecked is no pose to wait at.
         self._commanded = None if self._unchecked else steered.angles
@@ -1213,9 +1222,10 @@ class Avoider:
         # A route round an obstacle is remembered from where it started: the next target's way
         # can be the same way back.
         self._traveled = [search.start, *self._way] if len(self._way) > 1 else []
-        # A route round an obstacle is followed piece by piece on its checked lines; a straight
-        # way to the goal is commanded whole.
-        self._origin = measured.copy() if len(self._way) > 1 else None
+        # Every plan is followed piece by piece on its checked lines, a straight way to the goal
+        # too: sent to a far goal in one go, the joints with far to turn lag the others, and the
+        # ends can come onto the target with a joint still far off, and swing on past it.
+        self._origin = measured.copy()
         moved = not np.array_equal(measured, search.start)
         if moved and not self._clear_way(measured, self._way[0]):
             # The chain went on (along an earlier plan, or drifting while it held) and the
@@ -1314,7 +1324,7 @@ class Avoider:
         """The pose to head for: the next via pose once the chain, near the current one (within
         ``AHEAD`` px of sweep), can turn to it in a clear straight line, or once it rests on the
         current one (within ``SETTLED``: each piece is clear from its start, and the chain is
-        there). On a route round an obstacle, a pose on the piece's line at most ``LEAD``
+        there). Not the via pose itself, but the pose on the piece's line at most ``LEAD``
         radians ahead of the joint that has come the least far along it (see :meth:`_lead`)."""
         room = self.clearance
         way = self._way
@@ -1322,14 +1332,13 @@ class Avoider:
             near = room.swept(measured, way[0]) <= AHEAD
             if near and room.path_clear(measured, way[1]):
                 del way[0]
-                self._origin = None if self._origin is None else measured.copy()
+                self._origin = measured.copy()
             elif np.abs(measured - way[0]).max() <= SETTLED:
-                passed = way.pop(0)
-                self._origin = None if self._origin is None else passed
+                self._origin = way.pop(0)
             else:
                 break
         status = SolveStatus.PROCESSING if len(way) > 1 else solution.status
-        pose = way[0] if self._origin is None else self._lead(measured, self._origin, way[0])
+        pose = self._lead(measured, self._origin, way[0])
         return Solution(pose, status, solution.iterations, solution.error)
 
     @staticmethod

@@ -393,6 +393,52 @@ def test_on_a_route_the_chain_is_sent_along_its_line_just_ahead_of_its_slowest_j
     assert room.path_clear(ahead, command)
 
 
+def test_a_straight_way_to_a_far_goal_is_led_along_its_line_too():
+    # Sent to a far goal in one go, the joints with far to turn lag the others, and the end can
+    # reach the target with a joint still far off and swing on past it.
+    room = _shelf_room()
+    guide = Avoider(room)
+    start = np.array([0.5, 0.3, 0.2])
+    on_its_way = Solution(np.array([1.0, 0.5, 0.5]), SolveStatus.PROCESSING, 10, 50.0)
+    target = np.array([-250.0, 30.0])  # low on the left, over the floor
+    command = _settle(guide, start, on_its_way, target)[-1].angles
+    goal = guide._goal.copy()
+    span = goal - start
+    assert len(guide._way) == 1 and np.abs(span).max() > 2 * LEAD  # one straight piece, far
+    assert np.allclose(command, start + LEAD / np.abs(span).max() * span)
+    # The elbow ran on two leads, the wrist half of one: the command is one lead ahead of the
+    # wrist, and holds the elbow back on the line.
+    ahead = start + (command - start) * np.array([1.0, 2.0, 0.5])
+    held = guide.steer(ahead, on_its_way, target, 0.5).angles
+    assert np.allclose(held, start + 1.5 * (command - start))
+    arrived = _move_as_told(guide, start, on_its_way, target, 60)
+    assert np.allclose(arrived, goal) and room.misses(arrived, target)[0] <= 0.5
+
+
+def test_a_line_past_a_half_turn_of_a_free_joint_is_followed_to_its_end():
+    # The way round the post is the long way, past -pi on the free base joint, which the
+    # controller measures within [-pi, pi].
+    arm = Skeleton.chain([100.0, 100.0])
+    post = Obstacles.from_arrays(NO_SEGMENTS, np.array([[150.0, 100.0, 25.0]]))
+    room = Clearance(arm, np.full(2, 4.0), post)
+    guide = Avoider(room, budget=math.inf)
+    target = np.array([60.0, 170.0])
+    # CCD's answer on its way, the elbow swung round through the post.
+    through = Solution(np.array([0.75, 0.96]), SolveStatus.PROCESSING, 10, 3.0)
+    assert not room.path_clear(np.zeros(2), through.angles)
+    measured, base = np.zeros(2), []
+    for _ in range(200):
+        command = guide.steer(measured, through, target, 0.5).angles
+        base.append(command[0])
+        # As the servo turns a free joint: the short way to its command.
+        step = (command - measured + math.pi) % (2.0 * math.pi) - math.pi
+        measured = measured + step * min(1.0, 0.05 / max(np.abs(step).max(), 1e-12))
+        measured = (measured + math.pi) % (2.0 * math.pi) - math.pi
+        assert room.is_clear(measured)
+    assert min(base) < -math.pi  # sent the long way round
+    assert room.misses(measured, target)[0] <= 0.5 and room.is_clear(measured)
+
+
 def test_a_route_past_the_target_and_back_is_cut_where_the_end_passes_nearest():
     arm = Skeleton.chain([100.0, 100.0], base_angle=UP)
     far = Obstacles.from_arrays(NO_SEGMENTS, np.array([[1000.0, 1000.0, 10.0]]))
