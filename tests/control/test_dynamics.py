@@ -171,6 +171,20 @@ def test_joints_past_a_limit_on_their_own_are_scaled_while_the_rest_coast():
     # One factor for all gives the first two a small fraction of theirs.
     together = fit_drive(bias, push, wanted, limit)
     assert together.accelerations[0] / wanted[0] < 0.1
+    # The float path takes the same split, to the last bit.
+    floats = FloatInertia(chain)
+    fast, listed = floats.pose(angles), wanted.tolist()
+    reached, loads, _, _ = fit_floats(
+        fast.loads(gravity=(0.0, -90.0)),
+        fast.loads(alpha=floats.along(listed)),
+        listed,
+        limit.tolist(),
+        lambda k: fast.loads(
+            alpha=floats.along([a if j <= k else 0.0 for j, a in enumerate(listed)])
+        ),
+    )
+    assert list(reached) == drive.accelerations.tolist()
+    assert loads[0] == drive.loads.torques.tolist()
 
 
 def test_the_float_fit_gives_the_same_floats_as_numpy():
