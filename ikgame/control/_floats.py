@@ -316,8 +316,15 @@ def fit_floats(
         start = _affine(bias, near, 1.0)
         rest = _affine(push, near, -1.0)
         tail, _ = _largest_factor(start[0], rest[0], limits)
-        if tail is not None:
-            accelerations = [w if j <= binding else w * tail for j, w in enumerate(wanted)]
+        lead: float | None = 1.0
+        if tail is None:
+            # As in fit_drive: the joints up to it scaled with the rest coasting, then the rest.
+            lead, _ = _largest_factor(bias[0], near[0], limits)
+            if lead is not None:
+                start = _affine(bias, near, lead)
+                tail, _ = _largest_factor(start[0], rest[0], limits)
+        if tail is not None and lead is not None:
+            accelerations = [w * lead if j <= binding else w * tail for j, w in enumerate(wanted)]
             loads = _affine(start, rest, tail)
             return accelerations, loads, _saturated(loads[0], limits), True
     if scale is not None:

@@ -363,7 +363,9 @@ def fit_drive(
 
     With ``head``, a function giving the loads of the wanted accelerations of joints ``0..k``
     alone, the joints up to the one that runs out of torque keep their wanted accelerations and
-    only those beyond it are scaled (see :func:`plan_drive`); without it, every joint's.
+    only those beyond it are scaled (see :func:`plan_drive`); without it, every joint's. Where
+    the joints up to it are past a limit even alone, they are scaled by the largest factor
+    that fits with those beyond coasting, and those beyond by the largest that fits then.
 
     With ``weak``, which joints may give way and a function giving the loads of a unit
     acceleration of joint ``k`` alone, a weak joint the motion would take past its limit gives
@@ -395,8 +397,19 @@ def fit_drive(
         start = bias + near
         rest = push - near
         tail, _ = _largest_factor(start, rest, limit)
-        if tail is not None:
+        lead: float | None = 1.0
+        if tail is None:
+            # The joints up to it are past a limit on their own (one braking the long chain
+            # beyond it, say): they take the largest factor that fits with the rest coasting,
+            # and the rest what is left. One factor for all left such a joint at its limit the
+            # other way, pushed by the far joints' reaction, and it swung on past its goal.
+            lead, _ = _largest_factor(bias, near, limit)
+            if lead is not None:
+                start = bias + near.scaled(lead)
+                tail, _ = _largest_factor(start, rest, limit)
+        if tail is not None and lead is not None:
             accelerations = wanted.copy()
+            accelerations[: binding + 1] *= lead
             accelerations[binding + 1 :] *= tail
             return _drive(accelerations, start + rest.scaled(tail), limit)
     if scale is not None:

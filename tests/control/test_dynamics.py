@@ -144,6 +144,49 @@ def test_the_joints_up_to_the_one_that_runs_out_keep_their_acceleration():
     np.testing.assert_allclose(together.accelerations / wanted, together.accelerations[0] / 50.0)
 
 
+def test_joints_past_a_limit_on_their_own_are_scaled_while_the_rest_coast():
+    # The base and the next joint turn one way, the far joints the other, and the first two
+    # cannot have even their own accelerations: scaling every joint by one factor gave all of
+    # them a few percent of theirs, the first two too.
+    chain = _chain(8)
+    angles = np.cumsum(np.full(8, 0.3))
+    wanted = np.array([40.0] + [-60.0] * 7)
+    pose = Pose(chain, angles)
+    bias = pose.loads(gravity=(0, -90))
+    push = pose.loads(alpha=chain.along(wanted))
+    head = _head(pose, chain, wanted)
+    limit = np.full(8, 1e9)
+    limit[0], limit[1] = 0.5 * abs(bias.torques[0] + head(0).torques[0]), 2e5
+    assert np.any(np.abs((bias + head(1)).torques) > limit)
+    drive = fit_drive(bias, push, wanted, limit, head)
+    assert drive.consistent and drive.saturated.tolist() == [False, True] + [False] * 6
+    # Joint 1 pushes at its limit the way its own acceleration asks.
+    assert drive.loads.torques[1] == pytest.approx(-limit[1])
+    lead = drive.accelerations[:2] / wanted[:2]
+    assert lead[0] == pytest.approx(lead[1]) and 0.9 < lead[0] < 1.0
+    np.testing.assert_allclose(drive.accelerations[2:], 0.0, atol=1e-12)
+    check = inverse_dynamics(chain, angles, np.zeros(8), np.cumsum(drive.accelerations), (0, -90))
+    np.testing.assert_allclose(check.torques, drive.loads.torques, rtol=1e-9, atol=1e-6)
+    np.testing.assert_allclose(check.forces, drive.loads.forces, rtol=1e-9, atol=1e-6)
+    # One factor for all gives the first two a small fraction of theirs.
+    together = fit_drive(bias, push, wanted, limit)
+    assert together.accelerations[0] / wanted[0] < 0.1
+    # The float path takes the same split, to the last bit.
+    floats = FloatInertia(chain)
+    fast, listed = floats.pose(angles), wanted.tolist()
+    reached, loads, _, _ = fit_floats(
+        fast.loads(gravity=(0.0, -90.0)),
+        fast.loads(alpha=floats.along(listed)),
+        listed,
+        limit.tolist(),
+        lambda k: fast.loads(
+            alpha=floats.along([a if j <= k else 0.0 for j, a in enumerate(listed)])
+        ),
+    )
+    assert list(reached) == drive.accelerations.tolist()
+    assert loads[0] == drive.loads.torques.tolist()
+
+
 def test_the_float_fit_gives_the_same_floats_as_numpy():
     rng = np.random.default_rng(5)
     chain = _chain(7, seed=5)
