@@ -13,9 +13,9 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ikgame.control.dynamics import ChainInertia, give_way
+from ikgame.control.dynamics import ChainInertia, ListLoads, at_limits, give_way, plus_loads
 
-Loads = tuple[list[float], list[float], list[float]]
+Loads = ListLoads
 """Joint torques, then the x and y of the pivot forces, per joint."""
 
 
@@ -313,39 +313,26 @@ def fit_floats(
         scale, binding = _largest_factor(bias[0], push[0], limits)
     if head is not None and scale is not None and binding < len(limits) - 1:
         near = head(binding)
-        start = _affine(bias, near, 1.0)
-        rest = _affine(push, near, -1.0)
+        start = plus_loads(bias, near, 1.0)
+        rest = plus_loads(push, near, -1.0)
         tail, _ = _largest_factor(start[0], rest[0], limits)
         lead: float | None = 1.0
         if tail is None:
             # As in fit_drive: the joints up to it scaled with the rest coasting, then the rest.
             lead, _ = _largest_factor(bias[0], near[0], limits)
             if lead is not None:
-                start = _affine(bias, near, lead)
+                start = plus_loads(bias, near, lead)
                 tail, _ = _largest_factor(start[0], rest[0], limits)
         if tail is not None and lead is not None:
             accelerations = [w * lead if j <= binding else w * tail for j, w in enumerate(wanted)]
-            loads = _affine(start, rest, tail)
-            return accelerations, loads, _saturated(loads[0], limits), True
+            loads = plus_loads(start, rest, tail)
+            return accelerations, loads, at_limits(loads[0], limits), True
     if scale is not None:
-        loads = _affine(bias, push, scale)
-        return [scale * w for w in wanted], loads, _saturated(loads[0], limits), True
+        loads = plus_loads(bias, push, scale)
+        return [scale * w for w in wanted], loads, at_limits(loads[0], limits), True
     bt, bx, by = bias
     loads = ([min(max(b, -lim), lim) for b, lim in zip(bt, limits, strict=True)], bx, by)
-    return wanted, loads, _saturated(loads[0], limits), False
-
-
-def _affine(a: Loads, b: Loads, factor: float) -> Loads:
-    """``a + factor b``, list by list (with the factor 1 or -1, exactly a sum or a difference)."""
-    return (
-        [x + factor * y for x, y in zip(a[0], b[0], strict=True)],
-        [x + factor * y for x, y in zip(a[1], b[1], strict=True)],
-        [x + factor * y for x, y in zip(a[2], b[2], strict=True)],
-    )
-
-
-def _saturated(torques: list[float], limits: list[float]) -> list[bool]:
-    return [abs(t) >= lim * (1.0 - 1e-9) for t, lim in zip(torques, limits, strict=True)]
+    return wanted, loads, at_limits(loads[0], limits), False
 
 
 def _largest_factor(

@@ -495,14 +495,14 @@ def give_way(
     # The others' push: the wanted motion less the weak joints' own share of it.
     rest = push
     for k, col in zip(over, columns, strict=True):
-        rest = _plus(rest, col, -wanted[k])
+        rest = plus_loads(rest, col, -wanted[k])
     block = [[col[0][k] for col in columns] for k in over]
     at = [math.copysign(limits[k], bias[0][k] + push[0][k]) for k in over]
     fixed = _solve(block, [a - bias[0][k] for a, k in zip(at, over, strict=True)])
     slope = _solve(block, [-rest[0][k] for k in over])
     start, scaled = bias, rest
     for col, x0, x1 in zip(columns, fixed, slope, strict=True):
-        start, scaled = _plus(start, col, x0), _plus(scaled, col, x1)
+        start, scaled = plus_loads(start, col, x0), plus_loads(scaled, col, x1)
     for k, a in zip(over, at, strict=True):
         start[0][k], scaled[0][k] = a, 0.0
     if not all(abs(b) <= lim for b, lim in zip(start[0], limits, strict=True)):
@@ -518,18 +518,26 @@ def give_way(
     accelerations = [factor * w for w in wanted]
     for k, x0, x1 in zip(over, fixed, slope, strict=True):
         accelerations[k] = x0 + factor * x1
-    loads = _plus(start, scaled, factor)
-    saturated = [abs(t) >= lim * (1.0 - 1e-9) for t, lim in zip(loads[0], limits, strict=True)]
-    return accelerations, loads, saturated
+    loads = plus_loads(start, scaled, factor)
+    return accelerations, loads, at_limits(loads[0], limits)
 
 
-def _plus(a: ListLoads, b: ListLoads, factor: float) -> ListLoads:
-    """``a + factor b``, list by list."""
+def plus_loads(a: ListLoads, b: ListLoads, factor: float) -> ListLoads:
+    """``a + factor b``, list by list (with the factor 1 or -1, exactly a sum or a difference).
+
+    >>> plus_loads(([1.0], [2.0], [3.0]), ([1.0], [1.0], [1.0]), -1.0)
+    ([0.0], [1.0], [2.0])
+    """
     return (
         [x + factor * y for x, y in zip(a[0], b[0], strict=True)],
         [x + factor * y for x, y in zip(a[1], b[1], strict=True)],
         [x + factor * y for x, y in zip(a[2], b[2], strict=True)],
     )
+
+
+def at_limits(torques: list[float], limits: list[float]) -> list[bool]:
+    """Which joints' ``torques`` are at their ``limits`` (to within rounding)."""
+    return [abs(t) >= lim * (1.0 - 1e-9) for t, lim in zip(torques, limits, strict=True)]
 
 
 def _solve(matrix: list[list[float]], rhs: list[float]) -> list[float]:

@@ -1022,8 +1022,8 @@ class Avoider:
         moves)."""
         self._unchecked = False
         last = self._commanded
-        free = ~self.clearance.skeleton.limited
-        if self._way and last is not None and free.any():
+        if self._way and last is not None:
+            free = ~self.clearance.skeleton.limited
             # A free joint is measured within [-pi, pi], but a planned line can run on past a
             # half turn (round an obstacle the long way): it is read as the turn nearest the
             # pose commanded last, or the chain would be taken for back at the line's start.
