@@ -55,6 +55,10 @@ NEAR: Final = 0.05
 solved afresh only :data:`IK_RATE` times a second. One farther off is solved every tick while
 the chain travels to it, as the answer from each pose on the way can differ."""
 
+SETTLING: Final = 0.02
+"""rad/s: a joint turning slower than this is at rest; an answer near the chain for a target
+that holds still is kept while the chain comes in to it (see :meth:`Controller._reuse`)."""
+
 
 def joint_error(desired: np.ndarray, measured: np.ndarray, limited: np.ndarray) -> np.ndarray:
     """Signed angle error per joint, radians.
@@ -354,7 +358,7 @@ class Controller:
         else:
             solution = None
             if servo is not None and base_motion is None and not jumped:
-                solution = self._reuse(moved, goal_rates, dt)
+                solution = self._reuse(moved, goal_rates, dt, measured, velocities)
             if solution is None:
                 solution = self._solve(measured, target)
             self._held = solution.angles
@@ -394,22 +398,57 @@ class Controller:
         self._fresh = _Fresh(solution, solution.angles) if settled else None
         return solution
 
-    def _reuse(self, moved: bool, goal_rates: np.ndarray | None, dt: float) -> Solution | None:
+    def _reuse(
+        self,
+        moved: bool,
+        goal_rates: np.ndarray | None,
+        dt: float,
+        measured: np.ndarray,
+        velocities: np.ndarray,
+    ) -> Solution | None:
         """The last answer that arrived, while it is not yet time to solve afresh (see
         :data:`IK_RATE`), carried along with a moving target by ``goal_rates`` (rad/s); None
-        when it must be solved now."""
+        when it must be solved now.
+
+        For a target that holds still it is time only when the chain is not coming in to the
+        answer: a joint carried away from it, or every joint at rest (:data:`SETTLING`) with
+        one still short of it by more than the servo's creep. Solved afresh from a pose in
+        motion, the answer chases the chain's own lag: where the joints near the base come in
+        slowly (weak motors holding heavy links), the solver bends the light far joints to
+        make up for them, which the motors nearer the base, with little torque to spare, then
+        cannot carry, and the arm sags and comes back. Solved from where the motors hold a
+        chain that stopped short, the answer brings the end the last pixels.
+        """
         fresh = self._fresh
         if fresh is None or self._ik_rate is None:
             return None
         fresh.ticks += 1
         if fresh.ticks * dt * self._ik_rate > 1.0 - 1e-9:
-            return None
+            if moved or not self._coming_in(fresh.angles, measured, velocities):
+                return None
+            fresh.ticks = 0
         if moved:
             if goal_rates is None:
                 return None
             fresh.angles = self.skeleton.clamp(fresh.angles + goal_rates * dt)
         answer = fresh.solution
         return Solution(fresh.angles, SolveStatus.SUCCESS, 0, answer.error, answer.errors)
+
+    def _coming_in(self, goal: np.ndarray, measured: np.ndarray, velocities: np.ndarray) -> bool:
+        """True while no joint is carried away from ``goal`` (radians) and some joint still
+        turns toward it, or every joint is at rest within the servo's creep of it."""
+        short = 2.0 * SETTLING / self.gain
+        moving = off = False
+        for error, velocity in zip(
+            joint_error(goal, measured, self._limited).tolist(), velocities.tolist(), strict=True
+        ):
+            if abs(velocity) > SETTLING:
+                if error * velocity < 0.0:
+                    return False
+                moving = True
+            elif abs(error) > short:
+                off = True
+        return moving or not off
 
 
 @dataclass(eq=False)
