@@ -410,8 +410,8 @@ class Controller:
         :data:`IK_RATE`), carried along with a moving target by ``goal_rates`` (rad/s); None
         when it must be solved now.
 
-        For a target that holds still it is time only when the chain is not coming in to the
-        answer: a joint carried away from it, or every joint at rest (:data:`SETTLING`) with
+        For a target that holds still, once the answer is the solver's own (not carried), it
+        is time only when the chain is not coming in to it: a joint carried away from it, or every joint at rest (:data:`SETTLING`) with
         one still short of it by more than the servo's creep. Solved afresh from a pose in
         motion, the answer chases the chain's own lag: where the joints near the base come in
         slowly (weak motors holding heavy links), the solver bends the light far joints to
@@ -424,13 +424,14 @@ class Controller:
             return None
         fresh.ticks += 1
         if fresh.ticks * dt * self._ik_rate > 1.0 - 1e-9:
-            if moved or not self._coming_in(fresh.angles, measured, velocities):
+            if moved or fresh.carried or not self._coming_in(fresh.angles, measured, velocities):
                 return None
             fresh.ticks = 0
         if moved:
             if goal_rates is None:
                 return None
             fresh.angles = self.skeleton.clamp(fresh.angles + goal_rates * dt)
+            fresh.carried = True
         answer = fresh.solution
         return Solution(fresh.angles, SolveStatus.SUCCESS, 0, answer.error, answer.errors)
 
@@ -453,12 +454,13 @@ class Controller:
 
 @dataclass(eq=False)
 class _Fresh:
-    """An answer that arrived, where a moving target has carried it since (radians) and the
-    ticks since it was solved."""
+    """An answer that arrived, where a moving target has carried it since (radians), the
+    ticks since it was solved and whether it was carried (so is not the solver's own)."""
 
     solution: Solution
     angles: np.ndarray
     ticks: int = 0
+    carried: bool = False
 
 
 def _moved(target: np.ndarray | TargetSet, last: np.ndarray | TargetSet | None) -> bool:
