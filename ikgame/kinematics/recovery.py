@@ -70,7 +70,7 @@ import numpy as np
 
 from ikgame.kinematics._floats import FloatChain, float_angles, float_point
 from ikgame.kinematics.ccd import wrap_angle
-from ikgame.kinematics.jacobian import _chain_points, _check_settings, solve_dls
+from ikgame.kinematics.jacobian import _chain_points, _check_settings, jacobian, solve_dls
 from ikgame.kinematics.multi_jacobian import solve_dls_targets
 from ikgame.kinematics.registry import get_solver, get_target_solver
 from ikgame.kinematics.skeleton import Skeleton, tree_points
@@ -131,6 +131,13 @@ HOLD_SEEDS: Final = 32
 """Random poses tried for an answer the motors can hold, when the plain one arrives in a pose
 they cannot: such poses are a narrow share of those that arrive (a tenth, on an arm of four
 links whose motors weaken toward the tip)."""
+
+RELIEF_STEPS: Final = 40
+"""Most steps of the slide from an answer the motors cannot hold toward one they can, the end
+kept on the target (see ``_relieved``)."""
+
+RELIEF_TURN: Final = 0.05
+"""Radians: the most one joint turns in one step of that slide."""
 
 RANDOM_SEED: Final = 20091
 """Seed of the generator that draws the random restarts, fresh for every search."""
@@ -343,16 +350,11 @@ class RobustSolver:
                 tol,
                 (
                     _near_seeds(skeleton, self._solve, skeleton.clamp(start), plain.angles),
-                    _far_seeds(
-                        skeleton,
-                        self._solve,
-                        self._fallback,
-                        plain.angles,
-                        target,
-                        HOLD_SEEDS,
+                    _far_held_seeds(
+                        skeleton, self._solve, self._fallback, plain.angles, target, strain
                     ),
                 ),
-                strain,
+                lambda angles: strain(angles) <= HOLDS,
             )
         if plain.status is SolveStatus.SUCCESS:
             # Arriving from where an unfinished search left the chain is that search's answer.
@@ -573,17 +575,15 @@ class RobustSolver:
         target: np.ndarray,
         tol: float,
         seeds: tuple[_Seeds, _Seeds],
-        strain: Callable[[np.ndarray], float],
+        holds: Callable[[np.ndarray], bool],
     ) -> Solution:
         """After a plain solve that arrives in a pose the motors cannot hold: restarts from the
-        seeds of a stall, the first arrival they can hold wins and is followed. While the search
+        seeds of a stall, the first arrival they can hold (``holds``) wins and is followed. While the search
         goes on the plain answer serves; once it has tried every seed in vain, the plain answer
         serves for as long as the goal stays."""
         search = self._search
         if search is None or search.accept is None or not search.aims_at(target, tol):
-            search = self._search = _Search(
-                *seeds, target, tol, lambda angles: strain(angles) <= HOLDS
-            )
+            search = self._search = _Search(*seeds, target, tol, holds)
         search.far = True
         used = search.run(self._skeleton, target, tol, self.budget)
         if search.best is not None and search.arrived:
@@ -753,6 +753,61 @@ def _near_seeds(
             yield here, (dls,)
         yield stalled, (dls,)
     yield _backed_off(skeleton, stalled), (dls,)
+
+
+def _far_held_seeds(
+    skeleton: Skeleton,
+    solve: Solver,
+    fallback: Solver,
+    strained: np.ndarray,
+    target: np.ndarray,
+    strain: Callable[[np.ndarray], float],
+) -> _Seeds:
+    """The far restarts of a search for a pose the motors can hold (``HOLD_SEEDS`` random),
+    then the ``strained`` answer slid toward one they can hold (``_relieved``). The slide comes
+    last: it finds a pose near the answer, but the way there may pass poses the motors cannot
+    hold (a weak base lifting the stretched arm), where a far pose, folded, can be reached."""
+    yield from _far_seeds(skeleton, solve, fallback, strained, target, HOLD_SEEDS)
+    yield _relieved(skeleton, strained, strain), (solve_dls,)
+
+
+def _relieved(
+    skeleton: Skeleton, angles: np.ndarray, strain: Callable[[np.ndarray], float]
+) -> np.ndarray:
+    """``angles`` slid along the poses that keep the end where it is (the null space of the
+    end's Jacobian) down the ``strain`` of holding them, until it is within ``HOLDS`` or stops
+    falling: the arm's own answer, rearranged so the motors can hold it. The slide leaves the
+    end a little off; the restart from it brings the end back.
+
+    A chain has many poses for one end point and random restarts seldom land on one its weak
+    motors can hold (those bend the strong joints near the base and keep the links beyond the
+    weak ones near the vertical); the slide goes there from the answer at hand."""
+    pose = skeleton.clamp(np.array(angles, dtype=float))
+    count = skeleton.count
+    now = strain(pose)
+    for _ in range(RELIEF_STEPS):
+        if now <= HOLDS:
+            break
+        nudge = 1e-4
+        slope = np.array(
+            [(strain(pose + nudge * np.eye(1, count, j)[0]) - now) / nudge for j in range(count)]
+        )
+        jac = jacobian(skeleton, pose)
+        down = -(slope - np.linalg.pinv(jac) @ (jac @ slope))
+        largest = float(np.abs(down).max())
+        if largest < 1e-12:
+            break
+        step = down * (RELIEF_TURN / largest)
+        for _ in range(6):
+            trial = skeleton.clamp(pose + step)
+            after = strain(trial)
+            if after < now:
+                pose, now = trial, after
+                break
+            step = step / 2.0
+        else:
+            break
+    return pose
 
 
 def _far_tree_seeds(skeleton: Skeleton, solve: TargetSolver, fallback: TargetSolver) -> _Seeds:

@@ -22,7 +22,7 @@ from ikgame.kinematics import (
     TargetSet,
     forward_kinematics,
 )
-from ikgame.kinematics.recovery import RESTART_BUDGET, STILL_CALLS
+from ikgame.kinematics.recovery import HOLDS, RESTART_BUDGET, STILL_CALLS
 
 PI = math.pi
 NAMES = sorted(SOLVERS)
@@ -611,3 +611,36 @@ def test_a_moving_target_starts_no_search_for_a_pose_the_motors_can_hold():
             == plain.solve(pose, target, max_iterations=10, tolerance=TOLERANCE).iterations
         )
         pose = sol.angles
+
+
+def _hanging_strain(arm: Skeleton, limits: np.ndarray, mass: float, gravity: float):
+    """What holding a hanging chain of equal links still takes of its motors: each joint's
+    static load (the links beyond it, each its mass at its middle) over its torque limit."""
+
+    def strain(angles: np.ndarray) -> float:
+        points = forward_kinematics(arm, angles)[0]
+        middles = (points[:-1] + points[1:]) / 2.0
+        loads = [mass * gravity * float(np.sum(middles[j:, 0] - points[j, 0])) for j in range(6)]
+        return float(np.max(np.abs(loads) / limits))
+
+    return strain
+
+
+def test_an_answer_the_motors_cannot_hold_slides_to_one_they_can_that_ends_on_the_target():
+    # Six 60 px links hanging, the motors weaker toward the tip. FABRIK's answers, from its
+    # own start and from every random restart, bend the weak far joints and ask more of some
+    # motor than it has; a pose they hold exists (the target is its tip), and the slide along
+    # the poses that keep the end on the target finds one.
+    arm = Skeleton.chain([60.0] * 6, limits=[(-2.618, 2.618)] * 6, base_angle=-math.pi / 2)
+    limits = np.array([7.0e5, 5.0e5, 3.2e5, 1.8e5, 9.0e4, 3.0e4])
+    strain = _hanging_strain(arm, limits, 0.8, 1200.0)
+    target = np.array([224.0, -265.5])
+    pose = np.radians([-36.6, -14.0, 21.1, 3.7, -15.3, -10.2])
+    robust = RobustSolver(arm, "fabrik")
+    robust.strain = strain
+    plain = RobustSolver(arm, "fabrik").solve(pose, target, tolerance=TOLERANCE)
+    assert strain(plain.angles) > 1.0
+    for _ in range(3 * STILL_CALLS):
+        sol = robust.solve(pose, target, max_iterations=10, tolerance=TOLERANCE)
+    assert sol.status is SolveStatus.SUCCESS and sol.error <= TOLERANCE
+    assert strain(sol.angles) <= HOLDS
