@@ -59,6 +59,11 @@ SETTLING: Final = 0.02
 """rad/s: a joint turning slower than this is at rest; an answer near the chain for a target
 that holds still is kept while the chain comes in to it (see :meth:`Controller._reuse`)."""
 
+KEPT_STRAIN: Final = 0.5
+"""Share of its motors' torque limits past which holding an answer still strains them: such an
+answer, for a still target, is kept while the chain comes in to it (see
+:meth:`Controller._reuse`)."""
+
 
 def joint_error(desired: np.ndarray, measured: np.ndarray, limited: np.ndarray) -> np.ndarray:
     """Signed angle error per joint, radians.
@@ -410,21 +415,30 @@ class Controller:
         :data:`IK_RATE`), carried along with a moving target by ``goal_rates`` (rad/s); None
         when it must be solved now.
 
-        For a target that holds still, once the answer is the solver's own (not carried), it
-        is time only when the chain is not coming in to it: a joint carried away from it, or every joint at rest (:data:`SETTLING`) with
-        one still short of it by more than the servo's creep. Solved afresh from a pose in
-        motion, the answer chases the chain's own lag: where the joints near the base come in
-        slowly (weak motors holding heavy links), the solver bends the light far joints to
-        make up for them, which the motors nearer the base, with little torque to spare, then
-        cannot carry, and the arm sags and comes back. Solved from where the motors hold a
-        chain that stopped short, the answer brings the end the last pixels.
+        An answer for a target that holds still, the solver's own (not carried) and one that
+        holding still strains the motors (past :data:`KEPT_STRAIN` of some limit), is solved
+        afresh only when the chain is not coming in to it: a joint carried away from it, or
+        every joint at rest (:data:`SETTLING`) with one still short of it by more than the
+        servo's creep. Solved afresh from a pose in motion, the answer chases the chain's own
+        lag: where the joints near the base come in slowly (weak motors holding heavy links),
+        the solver bends the light far joints to make up for them, which the motors nearer the
+        base, with little torque to spare, then cannot carry, and the arm sags and comes back.
+        Where the motors have torque to spare, solving afresh on the way steers the end's
+        course (sixty light links coming in with their answer kept passed the target by 8% of
+        the approach), and solved from where the motors hold a chain that stopped short, the
+        answer brings the end the last pixels.
         """
         fresh = self._fresh
         if fresh is None or self._ik_rate is None:
             return None
         fresh.ticks += 1
         if fresh.ticks * dt * self._ik_rate > 1.0 - 1e-9:
-            if moved or fresh.carried or not self._coming_in(fresh.angles, measured, velocities):
+            if (
+                moved
+                or fresh.carried
+                or not self._straining(fresh)
+                or not self._coming_in(fresh.angles, measured, velocities)
+            ):
                 return None
             fresh.ticks = 0
         if moved:
@@ -434,6 +448,14 @@ class Controller:
             fresh.carried = True
         answer = fresh.solution
         return Solution(fresh.angles, SolveStatus.SUCCESS, 0, answer.error, answer.errors)
+
+    def _straining(self, fresh: _Fresh) -> bool:
+        """True when holding the ``fresh`` answer still takes more than :data:`KEPT_STRAIN` of
+        some motor's torque limit (see :attr:`RobustSolver.strain`)."""
+        if fresh.strain is None:
+            strain = self.solver.strain
+            fresh.strain = 0.0 if strain is None else strain(fresh.angles)
+        return fresh.strain > KEPT_STRAIN
 
     def _coming_in(self, goal: np.ndarray, measured: np.ndarray, velocities: np.ndarray) -> bool:
         """True while no joint is carried away from ``goal`` (radians) and some joint still
@@ -455,12 +477,14 @@ class Controller:
 @dataclass(eq=False)
 class _Fresh:
     """An answer that arrived, where a moving target has carried it since (radians), the
-    ticks since it was solved and whether it was carried (so is not the solver's own)."""
+    ticks since it was solved, whether it was carried (so is not the solver's own) and what
+    holding it still takes of the motors, once asked (see :meth:`Controller._straining`)."""
 
     solution: Solution
     angles: np.ndarray
     ticks: int = 0
     carried: bool = False
+    strain: float | None = None
 
 
 def _moved(target: np.ndarray | TargetSet, last: np.ndarray | TargetSet | None) -> bool:
