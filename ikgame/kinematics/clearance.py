@@ -38,7 +38,8 @@ moves, so they are searched once, and spreading each search over ticks by a budg
 work (``SEARCH_BUDGET``) so that no tick carries a whole one; a chain at rest or in the open
 costs two products of the links' levers a tick. A route is followed on its lines (a straight
 way to the goal too), each pose commanded at most ``LEAD`` ahead of the joint that has come
-least far.
+least far. A target no clear pose reaches (under the floor) sends the chain to the clear pose
+nearest it, where it rests held off the obstacle instead of pressing into it.
 While the base moves it plans nothing (a plan would be stale by the next tick): it only holds
 off an obstacle the links the solver's answers bring nearer it, polishing the pose it commanded
 onto the target for where the base is now. An answer arrives when every targeted end is within
@@ -949,9 +950,13 @@ class Avoider:
     (:meth:`Clearance.clear_answer`) and, when the straight way to it is blocked, the next via pose
     of a route (:meth:`Clearance.route`), with status ``PROCESSING``. The clear answer and the route
     are kept until the target moves, so they are searched once (a chain resting short of the target
-    for ``RELEASE_CALLS`` calls is handed back to the solver). When no clear answer or no route is
-    found, the solver's own solution is returned for that target: the chain behaves as without
-    obstacles (and a jammed one is reported blocked). With ``replan``, a chain the motors carried
+    for ``RELEASE_CALLS`` calls is handed back to the solver). When the obstacles keep every clear
+    pose from the target (it lies under the floor), the chain is sent instead to the clear pose
+    nearest it, by a route if one is found within ``JAMMED_WORK``, else to the pose the polish
+    draws it to from where it is, and kept there (:attr:`jammed`): it rests held off the
+    obstacle, where the solver's answer would press it in. When no clear pose or no route is
+    found at all, the solver's own solution is returned for that target: the chain behaves as
+    without obstacles (and a jammed one is reported blocked). With ``replan``, a chain the motors carried
     off the planned line, whose straight way on to its via pose is blocked from where it is, gets a
     new route from there. While the base moves (its :attr:`clearance`'s skeleton is another
     one each call) nothing is planned, and the solver's answers are handed on until they bring
@@ -1041,8 +1046,9 @@ class Avoider:
     def jammed(self) -> bool:
         """True while the chain is sent to the clear pose nearest a target the obstacles keep
         every clear pose from (under the floor, say): it comes to rest there, held off them,
-        instead of pressing into them, and is as stuck as one pressing."""
-        return self._jammed and self._goal is not None
+        instead of pressing into them, and is as stuck as one pressing. Not while a search for
+        a target since runs."""
+        return self._jammed and self._goal is not None and self._search is None
 
     @property
     def idle(self) -> bool:
@@ -1337,6 +1343,9 @@ class Avoider:
         still farther than the tolerance from its target (sagging short, say), where re-solving
         from the measured pose brings it the last pixels. A long chain within ``SETTLED`` on
         every joint can still be far from its goal, still closing in, and is not at rest.
+
+        A jammed chain (:attr:`jammed`) keeps its goal until the target moves: no clear pose
+        reaches the target, and the solver's answer would press it into the obstacle.
 
         A chain resting on the goal with its end effector on the target keeps the goal until
         the target moves: the solver's own answer (CCD's from a pose a few px short, or one it
