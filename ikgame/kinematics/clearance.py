@@ -142,7 +142,8 @@ JAMMED_WORK: Final = 150_000
 """Most units of work a search spends on a route to the clear pose nearest a target that no
 clear pose reaches (see :class:`Avoider`) before it settles for one nearer the chain: the
 routes to such poses on ``34_chain40_pressed_to_floor`` took 4,000 to 71,000 units where they
-were found, and from a chain lying along the floor none was in 500,000."""
+were found, and from CCD's chain resting at the first target's, none to the second's in the
+500,000 of a whole step."""
 
 SEARCH_BUDGET: Final = 300
 """Units of work an :class:`Avoider`'s search does in one call at most, before its last step (a
