@@ -375,10 +375,12 @@ class Simulation:
 
             def pushing() -> bool:
                 # A joint that stalled at its torque limit has stopped pushing, but only because
-                # pushing got it nowhere.
+                # pushing got it nowhere; a chain the planner holds off the obstacles that keep
+                # it from its target (jammed) only because pushing would get it nowhere.
                 return (
                     bool(limited.any())
                     or bool(self.controller.servo.stalled.any())
+                    or (avoider is not None and avoider.jammed)
                     or self.world.touching()
                 )
 

@@ -160,3 +160,50 @@ def test_a_blow_up_while_the_base_moves_is_diverged_not_a_crash(make_level):
     result = sim.run()
     assert result.status == "diverged"
     assert result.as_dict()["divergence"] == "base blew up at tick 2"
+
+
+def test_a_chain_jammed_by_a_target_under_the_floor_rests_off_it_blocked(make_level):
+    # No clear pose reaches a target under the floor: the chain is sent to the clear pose
+    # nearest it instead of the solver's answer through the floor, comes to rest there, off
+    # the floor, and is reported blocked; then it reaches the next target. Sent through the
+    # floor, it pressed a link 1.8 px into it with a motor at its torque limit to the end.
+    level = make_level(
+        world={"gravity": [0.0, -900.0]},
+        chain={
+            "base": [0.0, 0.0],
+            "angle": 90.0,
+            "links": [
+                {"length": 120.0, "limits": [-150.0, 150.0], "max_torque": 4.0e6, "repeat": 3}
+            ],
+        },
+        obstacles=[{"kind": "segment", "a": [-400.0, -20.0], "b": [500.0, -20.0]}],
+        script=[
+            {"reach": [200.0, -80.0], "hold": 0.5, "timeout": 3.0},
+            {"reach": [150.0, 150.0], "hold": 0.5, "timeout": 3.0},
+        ],
+    )
+    sim = Simulation(level, solver="dls", record=False)
+    room = sim.controller.avoider.clearance
+    lower, upper = sim.world.skeleton.lower, sim.world.skeleton.upper
+    nearest, worst = math.inf, 0.0
+    while not sim.done:
+        info = sim.step()
+        angles = sim.joint_angles()
+        worst = max(worst, float(np.max(lower - angles)), float(np.max(angles - upper)))
+        if sim.time <= 3.0:
+            nearest = min(nearest, float(room.gaps(angles).min()))
+            if sim.time > 2.9:
+                assert info.solver_status == "blocked"
+                assert not sim.world.torque_limited().any()
+                assert np.max(np.abs(sim.world.joint_velocities())) < 0.05
+    print(
+        "DBG",
+        nearest,
+        math.degrees(worst),
+        [(s.reached, s.note, s.final_error) for s in sim.result.steps],
+    )
+    assert nearest > 0.0  # never pressed into the floor
+    assert worst <= math.radians(0.5)
+    jammed, reached = sim.result.steps
+    assert not jammed.reached and "blocked" in jammed.note
+    assert reached.reached

@@ -38,7 +38,8 @@ moves, so they are searched once, and spreading each search over ticks by a budg
 work (``SEARCH_BUDGET``) so that no tick carries a whole one; a chain at rest or in the open
 costs two products of the links' levers a tick. A route is followed on its lines (a straight
 way to the goal too), each pose commanded at most ``LEAD`` ahead of the joint that has come
-least far.
+least far. A target no clear pose reaches (under the floor) sends the chain to the clear pose
+nearest it, where it rests held off the obstacle instead of pressing into it.
 While the base moves it plans nothing (a plan would be stale by the next tick): it only holds
 off an obstacle the links the solver's answers bring nearer it, polishing the pose it commanded
 onto the target for where the base is now. An answer arrives when every targeted end is within
@@ -71,6 +72,7 @@ __all__ = [
     "ITERATION_UNITS",
     "POSE_UNITS",
     "POLISH_REACH",
+    "JAMMED_WORK",
     "SEARCH_BUDGET",
     "Avoider",
     "Clearance",
@@ -136,6 +138,13 @@ RELEASE_CALLS: Final = 120
 """Calls at rest on a clear goal after which the solver answers again even short of the target
 (half a second at 240 ticks/s)."""
 
+JAMMED_WORK: Final = 150_000
+"""Most units of work a search spends on a route to the clear pose nearest a target that no
+clear pose reaches (see :class:`Avoider`) before it settles for one nearer the chain: the
+routes to such poses on ``34_chain40_pressed_to_floor`` took 4,000 to 71,000 units where they
+were found, and from CCD's chain resting at the first target's, none to the second's in the
+500,000 of a whole step."""
+
 SEARCH_BUDGET: Final = 300
 """Units of work an :class:`Avoider`'s search does in one call at most, before its last step (a
 unit is about 10 us of this machine's time: about 3 ms a call)."""
@@ -168,6 +177,20 @@ _MAX_SAMPLES: Final = 400
 _T = TypeVar("_T")
 _Work = Generator[float, None, _T]
 """A search in steps: each yields the units of work it did, and the search returns its result."""
+
+
+def _capped(work: _Work[_T], units: float) -> _Work[_T | None]:
+    """``work``, given up (None) once it has done more than ``units`` of work."""
+    spent = 0.0
+    try:
+        while spent <= units:
+            step = next(work)
+            spent += step
+            yield step
+    except StopIteration as done:
+        return done.value
+    work.close()
+    return None
 
 
 def _finish(work: _Work[_T]) -> _T:
@@ -552,7 +575,7 @@ class Clearance:
         target.
         """
         found = _finish(self._answering(measured, answer, target, tolerance))
-        return None if found is None else found[0]
+        return None if found is None or found[2] else found[0]
 
     def _answering(
         self,
@@ -560,9 +583,16 @@ class Clearance:
         answer: np.ndarray,
         target: np.ndarray | TargetSet,
         tolerance: float,
-    ) -> _Work[tuple[np.ndarray, bool] | None]:
+    ) -> _Work[tuple[np.ndarray, bool, bool] | None]:
         """:meth:`clear_answer` in steps of work (see :class:`Avoider`), with whether the
-        straight line to it from ``measured`` was checked clear."""
+        straight line to it from ``measured`` was checked clear and whether the obstacles keep
+        it from the targets (jammed).
+
+        Where :meth:`clear_answer` finds none because the obstacles are in the way (the targets
+        reached with them ignored, but no clear pose polished onto them: a target under the
+        floor), the clear pose the polish brought nearest the targets is returned, jammed: the
+        nearest a chain can come without pressing into an obstacle. None when no pose polished
+        is clear, or a chain's target is out of reach even with the obstacles ignored."""
         measured = np.asarray(measured, float)
         found: list[np.ndarray] = []
         short: list[Solution] = []
@@ -583,32 +613,36 @@ class Clearance:
                         short.append(sol)
                     continue
                 if (yield from self._checking(measured, sol.angles)):
-                    return sol.angles, True
+                    return sol.angles, True, False
                 found.append(sol.angles)
         if not found and short and not isinstance(target, TargetSet):
             # Close by an obstacle the polish can stall a px short, the pull on the end balanced
             # by the push off the obstacle. From the nearest such pose the end is taken onto the
             # target with the obstacles ignored, and the polish then only has to push off them.
-            start = min(short, key=lambda sol: sol.error).angles
-            free = yield from self._polishing(start, target, POLISH_ITERATIONS, tolerance, False)
+            start = min(short, key=lambda sol: sol.error)
+            free = yield from self._polishing(
+                start.angles, target, POLISH_ITERATIONS, tolerance, False
+            )
             if free.status is not SolveStatus.SUCCESS:
                 return None
             sol = yield from self._polishing(
                 free.angles, target, POLISH_ITERATIONS, tolerance, True
             )
-            if sol.status is not SolveStatus.SUCCESS:
-                return None
-            return sol.angles, (yield from self._checking(measured, sol.angles))
+            if sol.status is SolveStatus.SUCCESS:
+                return sol.angles, (yield from self._checking(measured, sol.angles)), False
+            if self.is_clear(sol.angles) and sol.error < start.error:
+                start = sol
+            return start.angles, False, True
         if not found and short:
             start = min(short, key=lambda sol: sol.error).angles
             # Both polished to the end, so that they differ only where an obstacle is in the way.
             nearest = (yield from self._polishing(start, target, FREE_ITERATIONS, 0.5, True)).angles
             free = yield from self._polishing(nearest, target, FREE_ITERATIONS, tolerance, False)
             gained = self.misses(nearest, target) - self.misses(free.angles, target)
-            return (nearest, False) if bool(np.all(gained <= tolerance)) else None
+            return nearest, False, bool(np.any(gained > tolerance))
         if not found:
             return None
-        return min(found, key=lambda pose: float(np.abs(pose - measured).sum())), False
+        return min(found, key=lambda pose: float(np.abs(pose - measured).sum())), False, False
 
     # -- paths -------------------------------------------------------------------------------
 
@@ -917,9 +951,13 @@ class Avoider:
     (:meth:`Clearance.clear_answer`) and, when the straight way to it is blocked, the next via pose
     of a route (:meth:`Clearance.route`), with status ``PROCESSING``. The clear answer and the route
     are kept until the target moves, so they are searched once (a chain resting short of the target
-    for ``RELEASE_CALLS`` calls is handed back to the solver). When no clear answer or no route is
-    found, the solver's own solution is returned for that target: the chain behaves as without
-    obstacles (and a jammed one is reported blocked). With ``replan``, a chain the motors carried
+    for ``RELEASE_CALLS`` calls is handed back to the solver). When the obstacles keep every clear
+    pose from the target (it lies under the floor), the chain is sent instead to the clear pose
+    nearest it, by a route if one is found within ``JAMMED_WORK``, else to the pose the polish
+    draws it to from where it is, and kept there (:attr:`jammed`): it rests held off the
+    obstacle, where the solver's answer would press it in. When no clear pose or no route is
+    found at all, the solver's own solution is returned for that target: the chain behaves as
+    without obstacles (and a jammed one is reported blocked). With ``replan``, a chain the motors carried
     off the planned line, whose straight way on to its via pose is blocked from where it is, gets a
     new route from there. While the base moves (its :attr:`clearance`'s skeleton is another
     one each call) nothing is planned, and the solver's answers are handed on until they bring
@@ -993,6 +1031,7 @@ class Avoider:
         self._origin: np.ndarray | None = None
         self._given_up: tuple[float, ...] | None = None
         self._tolerance: float | np.ndarray = 0.0
+        self._jammed = False
         self._resting = 0
         self._rest_misses = np.zeros(0)
         self._line: tuple[np.ndarray, np.ndarray, float] | None = None
@@ -1003,6 +1042,14 @@ class Avoider:
     def planning(self) -> bool:
         """True while a search is spread over calls (the chain waits, see the class)."""
         return self._search is not None
+
+    @property
+    def jammed(self) -> bool:
+        """True while the chain is sent to the clear pose nearest a target the obstacles keep
+        every clear pose from (under the floor, say): it comes to rest there, held off them,
+        instead of pressing into them, and is as stuck as one pressing. Not while a search for
+        a target since runs."""
+        return self._jammed and self._goal is not None and self._search is None
 
     @property
     def idle(self) -> bool:
@@ -1063,7 +1110,7 @@ class Avoider:
                     return self._follow(measured, solution)
                 # The motors left the planned line (joints at their speed or torque limits at
                 # different times) and the way on from here is blocked: plan again from here.
-                work = self._rerouting(measured, self._goal, self._tolerance)
+                work = self._rerouting(measured, self._goal, self._tolerance, jammed=self._jammed)
                 search = self._begin(key, measured, work, reroute=True)
                 return self._advance(search, measured, solution)
             self._forget()
@@ -1160,7 +1207,8 @@ class Avoider:
         goal: np.ndarray | None,
     ) -> _Work[_Plan | None]:
         """The search for a target: a route to ``goal``, else (or when it is None) to a clear
-        answer."""
+        answer, else, when the obstacles keep every clear pose from the target, to the clear pose
+        nearest it (a jammed plan)."""
         room = self.clearance
         start = np.array(start, dtype=float)
         if goal is not None:
@@ -1172,15 +1220,45 @@ class Avoider:
         found = yield from room._answering(start, answer, target, tolerance)
         if found is None:
             return None
-        goal, straight = found
+        goal, straight, jammed = found
         # Ends a clear answer leaves short of targets out of reach arrive within ``tolerance``
         # of where it leaves them.
         misses = room.misses(goal, target)
         arrival = np.where(misses > tolerance, misses + tolerance, tolerance)
         if straight:
             # The straight way to it was just checked clear: the route is that line.
-            return goal, [goal], arrival
+            return goal, [goal], arrival, jammed
+        if jammed:
+            return (yield from self._jamming(start, goal, target, tolerance))
         return (yield from self._rerouting(start, goal, arrival, target))
+
+    def _jamming(
+        self,
+        start: np.ndarray,
+        nearest: np.ndarray,
+        target: np.ndarray | TargetSet,
+        tolerance: float,
+    ) -> _Work[_Plan]:
+        """A jammed plan: a route to the clear pose ``nearest`` the target, if one is found
+        within ``JAMMED_WORK``; else the clear pose the polish draws ``start`` to toward the
+        target, when the straight way to it is clear; else ``start``: a chain that cannot reach
+        the target comes to rest near it, not pressing into what keeps it off (a search for a
+        way that does not exist would run on for millions of units)."""
+        room = self.clearance
+        # Where the ends come nearest a target they never reach is no cut to make.
+        plan = yield from _capped(
+            self._rerouting(start, nearest, tolerance, jammed=True), JAMMED_WORK
+        )
+        if plan is None:
+            near = yield from room._polishing(start, target, POLISH_ITERATIONS, tolerance, True)
+            clear = room.is_clear(near.angles)
+            goal = (
+                near.angles if clear and (yield from room._checking(start, near.angles)) else start
+            )
+            plan = goal, [goal], tolerance, True
+        goal = plan[0]
+        misses = room.misses(goal, target)
+        return goal, plan[1], np.where(misses > tolerance, misses + tolerance, tolerance), True
 
     def _rerouting(
         self,
@@ -1188,10 +1266,13 @@ class Avoider:
         goal: np.ndarray,
         tolerance: float | np.ndarray,
         target: np.ndarray | TargetSet | None = None,
+        *,
+        jammed: bool = False,
     ) -> _Work[_Plan | None]:
-        """The search for a route from ``start`` to ``goal``: the plan, or None. With the
-        ``target``, a route that takes the targeted ends past it and back is cut where they
-        come nearest (see :meth:`Clearance._trimming`)."""
+        """The search for a route from ``start`` to ``goal``: the plan (``jammed`` when the goal
+        is only the clear pose nearest the target), or None. With the ``target``, a route that
+        takes the targeted ends past it and back is cut where they come nearest (see
+        :meth:`Clearance._trimming`)."""
         start = np.array(start, dtype=float)
         room = self.clearance
         way = yield from room._routing(start, goal, self._traveled[::-1])
@@ -1199,7 +1280,7 @@ class Avoider:
             return None
         if target is not None:
             way = yield from room._trimming(start, way, target, float(np.min(tolerance)))
-        return way[-1], way, tolerance
+        return way[-1], way, tolerance, jammed
 
     def _advance(self, search: _Search, measured: np.ndarray, solution: Solution) -> Solution:
         """Do this call's share of the search; once it is done, take up its plan."""
@@ -1218,7 +1299,7 @@ class Avoider:
             self._given_up = search.key
             self._unchecked = True
             return solution
-        self._target, (self._goal, self._way, self._tolerance) = search.key, plan
+        self._target, (self._goal, self._way, self._tolerance, self._jammed) = search.key, plan
         # A route round an obstacle is remembered from where it started: the next target's way
         # can be the same way back.
         self._traveled = [search.start, *self._way] if len(self._way) > 1 else []
@@ -1230,7 +1311,7 @@ class Avoider:
         if moved and not self._clear_way(measured, self._way[0]):
             # The chain went on (along an earlier plan, or drifting while it held) and the
             # first piece is not clear from where it is now: route again from here.
-            work = self._rerouting(measured, self._goal, self._tolerance)
+            work = self._rerouting(measured, self._goal, self._tolerance, jammed=self._jammed)
             return self._wait(
                 self._begin(search.key, measured, work, reroute=True), measured, solution
             )
@@ -1253,6 +1334,7 @@ class Avoider:
     def _drop(self) -> None:
         """Forget the plan and any search: the solver's answer is commanded as it is."""
         self._target, self._goal, self._way, self._search = None, None, [], None
+        self._jammed = False
         self._origin = None
 
     def _arrived(self, measured: np.ndarray, target: np.ndarray | TargetSet) -> bool:
@@ -1263,11 +1345,15 @@ class Avoider:
         from the measured pose brings it the last pixels. A long chain within ``SETTLED`` on
         every joint can still be far from its goal, still closing in, and is not at rest.
 
+        A jammed chain (:attr:`jammed`) keeps its goal until the target moves: no clear pose
+        reaches the target, and the solver's answer would press it into the obstacle.
+
         A chain resting on the goal with its end effector on the target keeps the goal until
         the target moves: the solver's own answer (CCD's from a pose a few px short, or one it
         followed before) can be another pose, and swinging over to it overshoots.
         """
-        if np.abs(measured - self._goal).max() > SETTLED:
+        if self._jammed or np.abs(measured - self._goal).max() > SETTLED:
+            # Jammed, the solver's answer would only press into the obstacle.
             self._resting = 0
             return False
         misses = self.clearance.misses(measured, target)
@@ -1361,9 +1447,10 @@ class Avoider:
         return via if ahead >= 1.0 else origin + ahead * span
 
 
-_Plan = tuple[np.ndarray, list[np.ndarray], float | np.ndarray]
-"""A found plan: the clear goal, the via poses to it (the goal last) and the tolerance to arrive
-within."""
+_Plan = tuple[np.ndarray, list[np.ndarray], float | np.ndarray, bool]
+"""A found plan: the clear goal, the via poses to it (the goal last), the tolerance to arrive
+within and whether it is jammed (the goal only the clear pose nearest a target the obstacles
+keep every clear pose from)."""
 
 
 @dataclass(eq=False)

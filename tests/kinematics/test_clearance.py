@@ -3,7 +3,14 @@ import math
 import numpy as np
 import pytest
 
-from ikgame.kinematics import Skeleton, Solution, SolveStatus, TargetSet, forward_kinematics
+from ikgame.kinematics import (
+    Skeleton,
+    Solution,
+    SolveStatus,
+    TargetSet,
+    clearance,
+    forward_kinematics,
+)
 from ikgame.kinematics.clearance import (
     ITERATION_UNITS,
     LEAD,
@@ -11,6 +18,7 @@ from ikgame.kinematics.clearance import (
     Avoider,
     Clearance,
     Obstacles,
+    _capped,
     _finish,
 )
 
@@ -781,3 +789,62 @@ def test_a_target_just_above_the_floor_gets_a_clear_answer_though_polishes_stall
     pose = room.clear_answer(measured, answer, target, 0.5)
     assert pose is not None and room.is_clear(pose)
     assert np.hypot(*(forward_kinematics(arm, pose)[0][-1] - target)) <= 0.5
+
+
+def _under_the_floor() -> tuple[Clearance, np.ndarray, np.ndarray, Solution]:
+    """The shelf room, the arm up and to the left, a target 60 px under the floor and the
+    solver's answer for it, which reaches it through the floor."""
+    room = _shelf_room()
+    measured = np.array([0.5, 0.3, 0.2])
+    target = np.array([200.0, -80.0])
+    through = room.polish(np.zeros(3), target, iterations=200, avoid=False)
+    assert through.status is SolveStatus.SUCCESS and not room.is_clear(through.angles)
+    return room, measured, target, Solution(through.angles, SolveStatus.SUCCESS, 10, 0.0)
+
+
+def test_a_target_no_clear_pose_reaches_sends_the_chain_to_the_nearest_clear_one():
+    room, measured, target, through = _under_the_floor()
+    assert room.clear_answer(measured, through.angles, target, 0.5) is None
+    guide = Avoider(room)
+    # Every command is a clear straight line from where the arm is: never the answer through
+    # the floor, which the avoider handed on when it gave the target up.
+    rest = _move_as_told(guide, measured, through, target, 400)
+    assert guide.jammed and not guide.planning
+    assert room.is_clear(rest)
+    assert np.array_equal(guide.steer(rest, through, target, 0.5).angles, rest)
+    # Within a few px of as near as the floor, the link's radius and the margin let it come
+    # (60 + 6 + 4 px).
+    assert room.misses(rest, target)[0] < 80.0
+    guide.steer(rest, through, np.array([150.0, 150.0]), 0.5)
+    assert not guide.jammed
+
+
+def test_a_jammed_search_out_of_work_settles_for_the_polish_from_where_the_chain_is(
+    monkeypatch,
+):
+    room, _, target, through = _under_the_floor()
+    measured = np.array([-1.0, -0.3, -0.2])  # out to the right, above the floor
+    monkeypatch.setattr(clearance, "JAMMED_WORK", 0.0)
+    guide = Avoider(room)
+    rest = _move_as_told(guide, measured, through, target, 400)
+    assert guide.jammed and room.is_clear(rest)
+    # Not the route to the nearest clear pose, but the polish from the start toward the target:
+    # nearer the target than the start, reached in one clear straight line.
+    near = room.polish(measured, target)
+    assert np.allclose(rest, near.angles)
+    assert room.misses(rest, target)[0] < room.misses(measured, target)[0]
+
+
+def test_capped_work_gives_up_once_past_its_units():
+    def work():
+        for _ in range(10):
+            yield 10.0
+        return "done"
+
+    assert _finish(_capped(work(), 100.0)) == "done"
+    steps = []
+    capped = _capped(work(), 35.0)
+    with pytest.raises(StopIteration) as stop:
+        while True:
+            steps.append(next(capped))
+    assert stop.value.value is None and len(steps) == 4
