@@ -21,9 +21,13 @@ width). A chain aims its end effector at a point; a tree aims a
 - **a clear path** (:meth:`Clearance.route`): the motors turn every joint toward its goal
   together, so the chain moves close to the straight line in joint space. When that line sweeps
   through an obstacle (checked at poses no point of the chain moves more than ``PATH_STEP``
-  between), a bidirectional random tree in joint space (RRT-connect, seeded, at most
-  ``ROUTE_NODES`` nodes) finds a chain of clear straight pieces, shortened greedily; the chain
-  is steered through these via poses one after the other. A chain's two trees first grow along
+  between), a chain is first led by its end: drawn ``WALK_STEP`` px at a time along a way in
+  the plane (:meth:`Clearance.tip_path`: its links back to the base, then the goal's out, pulled
+  taut clear of the obstacles), each step polished clear from the last, so the links follow.
+  When the end falls behind, a bidirectional random tree in joint space (RRT-connect, seeded,
+  at most ``ROUTE_NODES`` nodes) finds a chain of clear straight pieces instead. Either way
+  they are shortened greedily, and the chain is steered through these via poses one after the
+  other. A chain's two trees first grow along
   the poses its polish steps through drawing the end from each tree's root toward a point out
   in the open (the retreat), and a tree's piece whose links' gaps at its two ends outweigh how
   far the links can sweep between them is clear without sampling. A route that takes the
@@ -639,9 +643,9 @@ class Clearance:
         obstacle drags). A start already closer than that may only get farther."""
         return _finish(self._checking(a, b))
 
-    def _checking(self, a: np.ndarray, b: np.ndarray) -> _Work[bool]:
+    def _checking(self, a: np.ndarray, b: np.ndarray, keep: float | None = None) -> _Work[bool]:
         """:meth:`path_clear`, ``PATH_CHUNK`` poses a step, stopping at the first chunk that
-        comes too close."""
+        comes too close; with ``keep``, the gap (px) to keep instead of half the margin."""
         if not len(self.obstacles):
             return True
         poses = self._samples(np.asarray(a, float), np.asarray(b, float))
@@ -650,15 +654,17 @@ class Clearance:
             gaps = self.smallest_gaps(poses[first : first + PATH_CHUNK])
             yield CHECK_UNITS + len(gaps) * self._pose_units
             if first == 0:
-                bar = _least_gap(self.margin / 2.0, float(gaps[0]))
+                bar = _least_gap(self.margin / 2.0 if keep is None else keep, float(gaps[0]))
                 gaps = gaps[1:]
             if not np.all(gaps >= bar):
                 return False
         return True
 
     def route(self, start: np.ndarray, goal: np.ndarray) -> list[np.ndarray] | None:
-        """Via poses from ``start`` to the clear ``goal`` (the goal last), each reached from the
-        one before in a clear straight line; None when the search found none.
+        """Via poses from ``start`` to the clear ``goal``, each reached from the one before in a
+        clear straight line; None when the search found none. The goal comes last, or for a
+        chain led there by its end (see :meth:`tip_path`) another clear pose that puts the end
+        where the goal does.
 
         >>> arm = Skeleton.chain([100.0, 100.0], base_angle=math.pi / 2)
         >>> post = Obstacles.from_arrays(np.empty((0, 5)), np.array([[0.0, 185.0, 20.0]]))
@@ -685,7 +691,12 @@ class Clearance:
         found = None
         if self.skeleton.is_chain:
             found = yield from self._walking(start, goal)
+        # A walked way's poses keep the margin, and so do the shortcuts across them: cut at half
+        # of it, its long swings graze the obstacles, and the motors, never quite on a line,
+        # caught a link of twenty on a shelf's end.
+        keep = self.margin
         if found is None:
+            keep = self.margin / 2.0
             found = yield from self._connect(start, goal)
         if found is None and back:
             found = yield from self._retracing(start, goal, back)
@@ -696,7 +707,7 @@ class Clearance:
         here, index = start, 0
         while index < len(found):
             far = len(found) - 1
-            while far > index and not (yield from self._checking(here, found[far])):
+            while far > index and not (yield from self._checking(here, found[far], keep)):
                 far -= 1
             here, index = found[far], far + 1
             way.append(here)
