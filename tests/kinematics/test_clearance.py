@@ -8,6 +8,7 @@ from ikgame.kinematics.clearance import (
     ITERATION_UNITS,
     LEAD,
     SEARCH_BUDGET,
+    TREE_FIRST,
     Avoider,
     Clearance,
     Obstacles,
@@ -442,10 +443,36 @@ def test_a_long_chain_is_led_round_the_rock_by_its_end_where_the_trees_find_no_w
         except StopIteration as done:
             way = done.value
             break
-    assert way is not None and not searched
+    assert way is not None and len(searched) == 1  # the trees gave up; the walk found it
     assert all(room.path_clear(a, b) for a, b in zip([left, *way], way, strict=False))
     assert room.misses(way[-1], LOW_BEYOND)[0] <= 1.0
     assert units < 50_000  # the trees gave up after 7.5 million
+
+
+def test_the_trees_search_first_and_the_walk_takes_over_once_they_have_done_their_share(
+    monkeypatch,
+):
+    room = _thirty_links_rock_room()
+    left, low = _up_left_and_low(room)
+    log: list[str] = []
+
+    def searching_trees(self, a, b):
+        while True:
+            log.append("tree")
+            yield ITERATION_UNITS
+
+    walking = Clearance._walking
+
+    def logged_walk(self, a, b):
+        log.append("walk")
+        return (yield from walking(self, a, b))
+
+    monkeypatch.setattr(Clearance, "_connect", searching_trees)
+    monkeypatch.setattr(Clearance, "_walking", logged_walk)
+    way = room.route(left, low)
+    assert way is not None
+    # The trees did their share, then the walk found the way and they were stopped.
+    assert log == ["tree"] * math.ceil(TREE_FIRST / ITERATION_UNITS) + ["walk"]
 
 
 def test_the_avoider_takes_thirty_links_from_up_left_to_low_beyond_the_rock(monkeypatch):
