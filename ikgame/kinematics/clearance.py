@@ -862,7 +862,7 @@ class Clearance:
         d = np.minimum(_distance_to(a[:, None], q0, q1), _distance_to(b[:, None], q0, q1))
         ends = _distance_to(np.stack((q0, q1))[:, None], a[:, None], b[:, None]).min(axis=0)
         d = np.minimum(d, ends)
-        return (np.where(_crossing(a, b, q0, q1), -d, d) - self._r).min(axis=-1)
+        return (np.where(_crossing(a, b, q0, q1), -d, d) - self._r).min(axis=-1, initial=math.inf)
 
     def _walking(self, start: np.ndarray, goal: np.ndarray) -> _Work[list[np.ndarray] | None]:
         """A chain's way from ``start`` to ``goal`` led by its end: the poses (``start``

@@ -423,6 +423,14 @@ def test_the_tip_path_keeps_to_the_side_of_the_rock_the_goals_links_pass():
     assert len(way) < 10  # pulled taut, not the two poses' 61 points
 
 
+def test_with_nothing_in_the_way_the_tip_path_is_one_straight_piece():
+    arm = Skeleton.chain([50.0] * 4, base_angle=UP)
+    room = Clearance(arm, np.full(4, 2.0), Obstacles.from_arrays(NO_SEGMENTS, NO_CIRCLES))
+    bent = np.array([0.5, 0.5, 0.5, 0.5])
+    way = room.tip_path(np.zeros(4), bent)
+    assert np.allclose(way, [room.points(np.zeros(4))[-1], room.points(bent)[-1]])
+
+
 def test_a_tip_path_is_for_a_chain():
     arms = Skeleton.tree([100.0, 80.0, 80.0], [-1, 0, 0], base_angle=UP)
     floor = Obstacles.from_arrays(np.array([[-300.0, -20.0, 300.0, -20.0, 0.0]]), NO_CIRCLES)
