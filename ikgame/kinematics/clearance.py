@@ -22,10 +22,15 @@ width). A chain aims its end effector at a point; a tree aims a
   together, so the chain moves close to the straight line in joint space. When that line sweeps
   through an obstacle (checked at poses no point of the chain moves more than ``PATH_STEP``
   between), a bidirectional random tree in joint space (RRT-connect, seeded, at most
-  ``ROUTE_NODES`` nodes) finds a chain of clear straight pieces, shortened greedily; the chain
-  is steered through these via poses one after the other. A chain's two trees first grow along
-  the poses its polish steps through drawing the end from each tree's root toward a point out
-  in the open (the retreat), and a tree's piece whose links' gaps at its two ends outweigh how
+  ``ROUTE_NODES`` nodes) finds a chain of clear straight pieces. A long chain's joint space is
+  too wide for the trees: once they have done ``TREE_FIRST`` units of work, a chain is led by
+  its end instead, drawn ``WALK_STEP`` px at a time along a way in the plane
+  (:meth:`Clearance.tip_path`: its links back to the base, then the goal's out, pulled taut
+  clear of the obstacles), each step polished clear from the last, so the links follow; the
+  trees go on if the end falls behind. Either way the pieces are shortened greedily, and the
+  chain is steered through these via poses one after the other. A chain's two trees first grow
+  along the poses its polish steps through drawing the end from each tree's root toward a point
+  out in the open (the retreat), and a tree's piece whose links' gaps at its two ends outweigh how
   far the links can sweep between them is clear without sampling. A route that takes the
   targeted ends past the target and back is cut where they come nearest it. An
   :class:`Avoider` remembers the last route of several pieces it took up: a chain still at its
@@ -65,6 +70,9 @@ __all__ = [
     "MARGIN",
     "PATH_STEP",
     "ROUTE_NODES",
+    "TREE_FIRST",
+    "WALK_STEP",
+    "WALK_ITERATIONS",
     "LEAD",
     "RANDOM_SEEDS",
     "RANDOM_POOL",
@@ -94,6 +102,16 @@ ROUTE_NODES: Final = 2500
 last links reaching in under a round rock, in a band a few px wider than they are) took about
 2,100 (1,500 found none), and a search that finds no way does that much more work before it
 gives up."""
+
+WALK_STEP: Final = 10.0
+"""How far along its tip path a chain's end is drawn between two poses of a walked way, px."""
+
+TREE_FIRST: Final = 20_000.0
+"""Units of work the route trees do before a chain's way is walked by its end instead (the
+trees go on if that finds none)."""
+
+WALK_ITERATIONS: Final = 20
+"""Polish iterations one step of a walked way takes at most."""
 
 RANDOM_SEEDS: Final = 12
 """Random poses (within the limits) polished after the deliberate seeds of a clear answer."""
@@ -665,9 +683,9 @@ class Clearance:
         obstacle drags). A start already closer than that may only get farther."""
         return _finish(self._checking(a, b))
 
-    def _checking(self, a: np.ndarray, b: np.ndarray) -> _Work[bool]:
+    def _checking(self, a: np.ndarray, b: np.ndarray, keep: float | None = None) -> _Work[bool]:
         """:meth:`path_clear`, ``PATH_CHUNK`` poses a step, stopping at the first chunk that
-        comes too close."""
+        comes too close; with ``keep``, the gap (px) to keep instead of half the margin."""
         if not len(self.obstacles):
             return True
         poses = self._samples(np.asarray(a, float), np.asarray(b, float))
@@ -676,15 +694,17 @@ class Clearance:
             gaps = self.smallest_gaps(poses[first : first + PATH_CHUNK])
             yield CHECK_UNITS + len(gaps) * self._pose_units
             if first == 0:
-                bar = _least_gap(self.margin / 2.0, float(gaps[0]))
+                bar = _least_gap(self.margin / 2.0 if keep is None else keep, float(gaps[0]))
                 gaps = gaps[1:]
             if not np.all(gaps >= bar):
                 return False
         return True
 
     def route(self, start: np.ndarray, goal: np.ndarray) -> list[np.ndarray] | None:
-        """Via poses from ``start`` to the clear ``goal`` (the goal last), each reached from the
-        one before in a clear straight line; None when the search found none.
+        """Via poses from ``start`` to the clear ``goal``, each reached from the one before in a
+        clear straight line; None when the search found none. The goal comes last, or for a
+        chain led there by its end (see :meth:`tip_path`) another clear pose that puts the end
+        where the goal does.
 
         >>> arm = Skeleton.chain([100.0, 100.0], base_angle=math.pi / 2)
         >>> post = Obstacles.from_arrays(np.empty((0, 5)), np.array([[0.0, 185.0, 20.0]]))
@@ -708,7 +728,7 @@ class Clearance:
         goal = np.asarray(goal, float)
         if (yield from self._checking(start, goal)):
             return [goal]
-        found = yield from self._connect(start, goal)
+        found, keep = yield from self._searching(start, goal)
         if found is None and back:
             found = yield from self._retracing(start, goal, back)
         if found is None:
@@ -718,11 +738,46 @@ class Clearance:
         here, index = start, 0
         while index < len(found):
             far = len(found) - 1
-            while far > index and not (yield from self._checking(here, found[far])):
+            while far > index and not (yield from self._checking(here, found[far], keep)):
                 far -= 1
             here, index = found[far], far + 1
             way.append(here)
         return way
+
+    def _searching(
+        self, start: np.ndarray, goal: np.ndarray
+    ) -> _Work[tuple[list[np.ndarray] | None, float]]:
+        """The poses from ``start`` (excluded) to ``goal`` the trees find (:meth:`_connect`), or
+        for a chain the walked way (:meth:`_walking`), and the least gap (px) the lines that
+        shorten them keep: half the margin for the trees', the margin for a walked way (its own
+        poses keep that; cut at half of it, its long swings grazed a shelf's end, and twenty
+        links the motors carried a little off the line caught there).
+
+        The trees search first: where they find a way at all in a few joint dimensions they find
+        it in a few thousand units of work. A chain's way is walked once they have done
+        ``TREE_FIRST`` units (or given up sooner), and they go on only if the walk finds none;
+        thirty links round a rock got no way from 2,500 nodes (7.5 million units)."""
+        tree = self._connect(start, goal)
+        spent, walk = 0.0, self.skeleton.is_chain
+        while True:
+            try:
+                units = next(tree)
+            except StopIteration as done:
+                found = done.value
+                break
+            yield units
+            spent += units
+            if walk and spent >= TREE_FIRST:
+                walk = False
+                walked = yield from self._walking(start, goal)
+                if walked is not None:
+                    tree.close()
+                    return walked, self.margin
+        if found is None and walk:
+            walked = yield from self._walking(start, goal)
+            if walked is not None:
+                return walked, self.margin
+        return found, self.margin / 2.0
 
     def _retracing(
         self, start: np.ndarray, goal: np.ndarray, back: list[np.ndarray]
@@ -792,6 +847,90 @@ class Clearance:
         if (yield from self._checking(way[-1], cut)):
             return [*passed, cut, way[-1]]
         return way
+
+    def tip_path(self, start: np.ndarray, goal: np.ndarray) -> np.ndarray:
+        """(m, 2) a way in the plane for a chain's end from where pose ``start`` puts it to
+        where pose ``goal`` does, px: ``start``'s links from the end back to the base, then
+        ``goal``'s out to its end, pulled taut by straight pieces that keep the last link's
+        radius, the margin and ``ACTIVE`` px from every obstacle.
+
+        The links follow where the end leads, so the way keeps to the side of each obstacle on
+        which the goal's links pass it (a way over a rock the chain is too short to go round
+        and down would be shorter for the end alone).
+
+        Ten 20 px links standing straight up, a floor and a rock; the goal reaches in under
+        the rock's far side, and so does the way (the points after the first):
+
+        >>> arm = Skeleton.chain([20.0] * 10, base_angle=math.pi / 2)
+        >>> floor = np.array([[-300.0, -10.0, 300.0, -10.0, 0.0]])
+        >>> room = Clearance(arm, np.full(10, 2.0), Obstacles.from_arrays(floor, [[100, 60, 30]]))
+        >>> up = np.zeros(10)
+        >>> under = room.clear_answer(up, up, np.array([150.0, 10.0]), 0.5)
+        >>> np.round(room.tip_path(up, under)[:, 1]).tolist()
+        [200.0, 36.0, 29.0, 21.0, 28.0, 37.0, 30.0, 10.0]
+        """
+        if not self.skeleton.is_chain:
+            raise ValueError("a tip path is for a chain")
+        return _finish(self._tip_path(np.asarray(start, float), np.asarray(goal, float)))
+
+    def _tip_path(self, start: np.ndarray, goal: np.ndarray) -> _Work[np.ndarray]:
+        """:meth:`tip_path`, a point of the way a step (``CHECK_UNITS`` each)."""
+        line = np.concatenate((self.points(start)[::-1], self.points(goal)[1:]))
+        keep = float(self.radii[-1]) + self.margin + ACTIVE
+        way, here = [line[0]], 0
+        while here < len(line) - 1:
+            ahead = line[here + 1 :]
+            clear = self._segment_gaps(line[here], ahead) >= keep
+            yield CHECK_UNITS
+            # The line's own pieces are links of clear poses: kept even when nearer than that.
+            far = int(np.nonzero(clear)[0].max(initial=0))
+            here += far + 1
+            way.append(line[here])
+        return np.array(way)
+
+    def _segment_gaps(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """(m,) the smallest gap (px) of each segment from point ``a`` to the (m, 2) points
+        ``b`` to any obstacle's surface."""
+        q0, q1 = self._a, self._b
+        a = np.broadcast_to(a, b.shape)
+        d = np.minimum(_distance_to(a[:, None], q0, q1), _distance_to(b[:, None], q0, q1))
+        ends = _distance_to(np.stack((q0, q1))[:, None], a[:, None], b[:, None]).min(axis=0)
+        d = np.minimum(d, ends)
+        return (np.where(_crossing(a, b, q0, q1), -d, d) - self._r).min(axis=-1, initial=math.inf)
+
+    def _walking(self, start: np.ndarray, goal: np.ndarray) -> _Work[list[np.ndarray] | None]:
+        """A chain's way from ``start`` to ``goal`` led by its end: the poses (``start``
+        excluded) the polish steps the end through along :meth:`tip_path`, ``WALK_STEP`` px at a
+        time from the last, each reached from the one before in a clear straight line, then the
+        goal, or if that line is not clear the last pose polished onto the goal's end; None when
+        the end falls behind by more than a step or a step is not clear.
+
+        A long chain's joint space is too wide for random trees (thirty links round a rock: no
+        way in 2,500 nodes, 7.5 million units of work); drawn by its end along a way in the open,
+        the links follow it, each clear of what they pass."""
+        way = yield from self._tip_path(start, goal)
+        lengths = np.hypot(*np.diff(way, axis=0).T)
+        along = np.concatenate(([0.0], np.cumsum(lengths)))
+        count = max(1, math.ceil(along[-1] / WALK_STEP))
+        marks = np.linspace(0.0, along[-1], count + 1)[1:]
+        aims = np.column_stack([np.interp(marks, along, way[:, k]) for k in range(2)])
+        pose, poses = start, []
+        for aim in aims:
+            sol = yield from self._polishing(pose, aim, WALK_ITERATIONS, 1.0, True)
+            behind = float(self.misses(sol.angles, aim)[0])
+            if behind > WALK_STEP or not self.is_clear(sol.angles):
+                return None
+            if not (yield from self._checking(pose, sol.angles)):
+                return None
+            pose = sol.angles
+            poses.append(pose)
+        if (yield from self._checking(pose, goal)):
+            return [*poses, goal]
+        end = self.points(goal)[-1]
+        sol = yield from self._polishing(pose, end, POLISH_ITERATIONS, 0.5, True)
+        if sol.status is not SolveStatus.SUCCESS:
+            return None
+        return [*poses, sol.angles] if (yield from self._checking(pose, sol.angles)) else None
 
     def _connect(self, start: np.ndarray, goal: np.ndarray) -> _Work[list[np.ndarray] | None]:
         """RRT-connect in joint space: the poses from ``start`` (excluded) to ``goal``.

@@ -15,6 +15,7 @@ from ikgame.kinematics.clearance import (
     ITERATION_UNITS,
     LEAD,
     SEARCH_BUDGET,
+    TREE_FIRST,
     Avoider,
     Clearance,
     Obstacles,
@@ -382,6 +383,125 @@ def test_a_chain_away_from_the_end_of_its_last_route_is_not_sent_back_along_it()
     beside, on = WAY_IN[0], WAY_IN[1]
     assert room.path_clear(UP_LEFT, beside) and room.path_clear(beside, on)
     assert _finish(room._retracing(UP_LEFT, on, [beside, UP_LEFT])) is None
+
+
+def _thirty_links_rock_room() -> Clearance:
+    """Thirty 10 px links mounted straight up, a floor 20 px below the base and a round rock
+    (radius 40 px) to the right whose bottom is 50 px above the floor (the stress level of
+    thirty links round a rock)."""
+    limits = [(-math.radians(120.0), math.radians(120.0))] * 30
+    arm = Skeleton.chain([10.0] * 30, base_angle=UP, limits=limits)
+    obstacles = Obstacles.from_arrays(
+        np.array([[-900.0, -20.0, 900.0, -20.0, 0.0]]), np.array([[130.0, 70.0, 40.0]])
+    )
+    return Clearance(arm, np.full(30, 2.5), obstacles)
+
+
+LOW_BEYOND = np.array([200.0, 10.0])
+"""The stress level's target low beyond the rock."""
+
+
+def _up_left_and_low(room: Clearance) -> tuple[np.ndarray, np.ndarray]:
+    """The thirty links reaching up to the left, and a clear answer low beyond the rock."""
+    left = room.polish(np.zeros(30), np.array([-120.0, 220.0])).angles
+    low = room.clear_answer(left, left, LOW_BEYOND, 0.5)
+    assert room.is_clear(left) and low is not None and not room.path_clear(left, low)
+    return left, low
+
+
+def _no_tree(searched: list[np.ndarray]):
+    def connect(self, a, b):
+        # The trees in thirty joint dimensions: none found in 2,500 nodes (7.5 million units).
+        searched.append(b)
+        yield ITERATION_UNITS
+
+    return connect
+
+
+def test_the_tip_path_keeps_to_the_side_of_the_rock_the_goals_links_pass():
+    room = _thirty_links_rock_room()
+    left, low = _up_left_and_low(room)
+    way = room.tip_path(left, low)
+    assert np.array_equal(way[0], room.points(left)[-1])
+    assert np.array_equal(way[-1], room.points(low)[-1])
+    # Under the rock, as the goal's links pass it: over it the chain is 16 px too short to go
+    # round and down to the target.
+    below = (way[:, 0] > 90.0) & (way[:, 0] < 170.0)
+    assert below.any() and np.all(way[below, 1] < 30.0)
+    assert len(way) < 10  # pulled taut, not the two poses' 61 points
+
+
+def test_with_nothing_in_the_way_the_tip_path_is_one_straight_piece():
+    arm = Skeleton.chain([50.0] * 4, base_angle=UP)
+    room = Clearance(arm, np.full(4, 2.0), Obstacles.from_arrays(NO_SEGMENTS, NO_CIRCLES))
+    bent = np.array([0.5, 0.5, 0.5, 0.5])
+    way = room.tip_path(np.zeros(4), bent)
+    assert np.allclose(way, [room.points(np.zeros(4))[-1], room.points(bent)[-1]])
+
+
+def test_a_tip_path_is_for_a_chain():
+    arms = Skeleton.tree([100.0, 80.0, 80.0], [-1, 0, 0], base_angle=UP)
+    floor = Obstacles.from_arrays(np.array([[-300.0, -20.0, 300.0, -20.0, 0.0]]), NO_CIRCLES)
+    with pytest.raises(ValueError, match="chain"):
+        Clearance(arms, np.full(3, 5.0), floor).tip_path(np.zeros(3), np.ones(3))
+
+
+def test_a_long_chain_is_led_round_the_rock_by_its_end_where_the_trees_find_no_way(monkeypatch):
+    room = _thirty_links_rock_room()
+    left, low = _up_left_and_low(room)
+    searched: list[np.ndarray] = []
+    monkeypatch.setattr(Clearance, "_connect", _no_tree(searched))
+    units = 0.0
+    work = room._routing(left, low)
+    while True:
+        try:
+            units += next(work)
+        except StopIteration as done:
+            way = done.value
+            break
+    assert way is not None and len(searched) == 1  # the trees gave up; the walk found it
+    assert all(room.path_clear(a, b) for a, b in zip([left, *way], way, strict=False))
+    assert room.misses(way[-1], LOW_BEYOND)[0] <= 1.0
+    assert units < 50_000  # the trees gave up after 7.5 million
+
+
+def test_the_trees_search_first_and_the_walk_takes_over_once_they_have_done_their_share(
+    monkeypatch,
+):
+    room = _thirty_links_rock_room()
+    left, low = _up_left_and_low(room)
+    log: list[str] = []
+
+    def searching_trees(self, a, b):
+        while True:
+            log.append("tree")
+            yield ITERATION_UNITS
+
+    walking = Clearance._walking
+
+    def logged_walk(self, a, b):
+        log.append("walk")
+        return (yield from walking(self, a, b))
+
+    monkeypatch.setattr(Clearance, "_connect", searching_trees)
+    monkeypatch.setattr(Clearance, "_walking", logged_walk)
+    way = room.route(left, low)
+    assert way is not None
+    # The trees did their share, then the walk found the way and they were stopped.
+    assert log == ["tree"] * math.ceil(TREE_FIRST / ITERATION_UNITS) + ["walk"]
+
+
+def test_the_avoider_takes_thirty_links_from_up_left_to_low_beyond_the_rock(monkeypatch):
+    room = _thirty_links_rock_room()
+    left, _ = _up_left_and_low(room)
+    monkeypatch.setattr(Clearance, "_connect", _no_tree([]))
+    # The solver's own answer runs through the rock.
+    through = room.polish(left, LOW_BEYOND, avoid=False)
+    assert not room.is_clear(through.angles)
+    guide = Avoider(room)
+    arrived = _move_as_told(guide, left, through, LOW_BEYOND, 600)
+    assert room.is_clear(arrived)
+    assert room.misses(arrived, LOW_BEYOND)[0] <= 0.5
 
 
 def test_on_a_route_the_chain_is_sent_along_its_line_just_ahead_of_its_slowest_joint():
