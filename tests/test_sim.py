@@ -69,18 +69,21 @@ def test_target_inside_an_obstacle_fails_without_blowing_up(make_level):
     assert 30.0 <= result.steps[0].final_error <= 60.0
 
 
+_THREE_LINKS_IN_GRAVITY = {
+    "world": {"gravity": [0.0, -900.0]},
+    "chain": {
+        "base": [0.0, 0.0],
+        "angle": 90.0,
+        "links": [{"length": 120.0, "limits": [-150.0, 150.0], "max_torque": 4.0e6, "repeat": 3}],
+    },
+}
+
+
 def test_the_chain_reaches_under_a_shelf_without_pressing_against_it(make_level):
     # The straight answers for a target under a shelf press the arm against it (the solvers
     # know no obstacles); the controller commands a clear pose and a clear way to it instead.
     level = make_level(
-        world={"gravity": [0.0, -900.0]},
-        chain={
-            "base": [0.0, 0.0],
-            "angle": 90.0,
-            "links": [
-                {"length": 120.0, "limits": [-150.0, 150.0], "max_torque": 4.0e6, "repeat": 3}
-            ],
-        },
+        **_THREE_LINKS_IN_GRAVITY,
         obstacles=[
             {"kind": "segment", "a": [-400.0, -20.0], "b": [500.0, -20.0]},
             {"kind": "segment", "a": [130.0, 130.0], "b": [420.0, 130.0], "radius": 6.0},
@@ -168,14 +171,7 @@ def test_a_chain_jammed_by_a_target_under_the_floor_rests_off_it_blocked(make_le
     # the floor, and is reported blocked; then it reaches the next target. Sent through the
     # floor, it pressed a link 1.8 px into it with a motor at its torque limit to the end.
     level = make_level(
-        world={"gravity": [0.0, -900.0]},
-        chain={
-            "base": [0.0, 0.0],
-            "angle": 90.0,
-            "links": [
-                {"length": 120.0, "limits": [-150.0, 150.0], "max_torque": 4.0e6, "repeat": 3}
-            ],
-        },
+        **_THREE_LINKS_IN_GRAVITY,
         obstacles=[{"kind": "segment", "a": [-400.0, -20.0], "b": [500.0, -20.0]}],
         script=[
             {"reach": [200.0, -80.0], "hold": 0.5, "timeout": 3.0},
@@ -196,12 +192,6 @@ def test_a_chain_jammed_by_a_target_under_the_floor_rests_off_it_blocked(make_le
                 assert info.solver_status == "blocked"
                 assert not sim.world.torque_limited().any()
                 assert np.max(np.abs(sim.world.joint_velocities())) < 0.05
-    print(
-        "DBG",
-        nearest,
-        math.degrees(worst),
-        [(s.reached, s.note, s.final_error) for s in sim.result.steps],
-    )
     assert nearest > 0.0  # never pressed into the floor
     assert worst <= math.radians(0.5)
     jammed, reached = sim.result.steps
