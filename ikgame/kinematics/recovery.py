@@ -42,7 +42,8 @@ With :attr:`RobustSolver.strain` set (what holding a pose still takes of the mot
 the caller knows: this package knows no dynamics), a plain answer, arrived or still on its way,
 that takes more than ``STRAINED`` of some motor's limit starts, once the target has held still
 for ``STILL_CALLS`` calls, the same restarts (with
-``HOLD_SEEDS`` random poses), in which only an arrival within ``HOLDS`` counts; the first is
+``HOLD_SEEDS`` random poses, then the answer slid along the poses that keep the end on the
+target toward one the motors hold), in which only an arrival within ``HOLDS`` counts; the first is
 followed like a far seed's answer. Until one is found the plain answer serves, and once every
 seed has failed it serves for as long as the goal stays.
 
@@ -93,6 +94,8 @@ __all__ = [
     "STRAINED",
     "HOLDS",
     "HOLD_SEEDS",
+    "RELIEF_STEPS",
+    "RELIEF_TURN",
 ]
 
 RESTART_BUDGET: Final = 100
@@ -783,15 +786,12 @@ def _relieved(
     motors can hold (those bend the strong joints near the base and keep the links beyond the
     weak ones near the vertical); the slide goes there from the answer at hand."""
     pose = skeleton.clamp(np.array(angles, dtype=float))
-    count = skeleton.count
+    nudges = 1e-4 * np.eye(skeleton.count)
     now = strain(pose)
     for _ in range(RELIEF_STEPS):
         if now <= HOLDS:
             break
-        nudge = 1e-4
-        slope = np.array(
-            [(strain(pose + nudge * np.eye(1, count, j)[0]) - now) / nudge for j in range(count)]
-        )
+        slope = np.array([strain(pose + nudge) - now for nudge in nudges]) / 1e-4
         jac = jacobian(skeleton, pose)
         down = -(slope - np.linalg.pinv(jac) @ (jac @ slope))
         largest = float(np.abs(down).max())

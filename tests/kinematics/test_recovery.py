@@ -620,7 +620,9 @@ def _hanging_strain(arm: Skeleton, limits: np.ndarray, mass: float, gravity: flo
     def strain(angles: np.ndarray) -> float:
         points = forward_kinematics(arm, angles)[0]
         middles = (points[:-1] + points[1:]) / 2.0
-        loads = [mass * gravity * float(np.sum(middles[j:, 0] - points[j, 0])) for j in range(6)]
+        loads = [
+            mass * gravity * float(np.sum(middles[j:, 0] - points[j, 0])) for j in range(arm.count)
+        ]
         return float(np.max(np.abs(loads) / limits))
 
     return strain
