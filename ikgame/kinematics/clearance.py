@@ -1360,10 +1360,7 @@ class Avoider:
         if found is None:
             return None
         goal, straight, jammed = found
-        # Ends a clear answer leaves short of targets out of reach arrive within ``tolerance``
-        # of where it leaves them.
-        misses = room.misses(goal, target)
-        arrival = np.where(misses > tolerance, misses + tolerance, tolerance)
+        arrival = self._arrival(goal, target, tolerance)
         if straight:
             # The straight way to it was just checked clear: the route is that line.
             return goal, [goal], arrival, jammed
@@ -1395,9 +1392,16 @@ class Avoider:
                 near.angles if clear and (yield from room._checking(start, near.angles)) else start
             )
             plan = goal, [goal], tolerance, True
-        goal = plan[0]
-        misses = room.misses(goal, target)
-        return goal, plan[1], np.where(misses > tolerance, misses + tolerance, tolerance), True
+        return plan[0], plan[1], self._arrival(plan[0], target, tolerance), True
+
+    def _arrival(
+        self, goal: np.ndarray, target: np.ndarray | TargetSet, tolerance: float
+    ) -> np.ndarray:
+        """The tolerance (px, per target) to arrive at ``goal`` within: ends it leaves short of
+        their targets (out of reach, or kept off by obstacles) arrive within ``tolerance`` of
+        where it leaves them."""
+        misses = self.clearance.misses(goal, target)
+        return np.where(misses > tolerance, misses + tolerance, tolerance)
 
     def _rerouting(
         self,
@@ -1492,7 +1496,6 @@ class Avoider:
         followed before) can be another pose, and swinging over to it overshoots.
         """
         if self._jammed or np.abs(measured - self._goal).max() > SETTLED:
-            # Jammed, the solver's answer would only press into the obstacle.
             self._resting = 0
             return False
         misses = self.clearance.misses(measured, target)
