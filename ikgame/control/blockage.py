@@ -14,6 +14,7 @@ from __future__ import annotations
 
 from collections import deque
 from collections.abc import Callable
+from itertools import pairwise
 from typing import Final
 
 __all__ = ["BlockWatch"]
@@ -26,6 +27,23 @@ PROGRESS: Final = 1.0
 
 NEAR: Final = 2.0
 """Within this many arrival distances of the target nothing counts as blocked."""
+
+FADING: Final = 0.5
+"""A chain whose progress is dying out is blocked once the progress still to come, projected
+from the window's last two thirds, is under this share of its way to go..."""
+
+SLOW: Final = 0.1
+"""...and it closed less than this share of its way to go over the window: a chain still
+closing fast may yet round what it slides along."""
+
+STEADY: Final = 0.5
+"""A dying fall shrinks by about the same ratio from each third of the window to the next: the
+later ratio at least this share of the earlier. A chain that swung free and then hit something
+fell far faster before the hit."""
+
+RISE: Final = 0.05
+"""A dying fall's error rises by at most this much from one tick to the next, px: more is a
+swing, not a slide coming to rest."""
 
 
 class BlockWatch:
@@ -59,7 +77,31 @@ class BlockWatch:
         self._errors.append(error)
         if not reachable or error <= self._near or len(self._errors) < self._errors.maxlen:
             return False
-        # Stuck means the error has stayed within one band for the whole window: a target that
-        # has just jumped away, or a chain bouncing off something, moves the error a lot.
-        stuck = max(self._errors) - min(self._errors) < PROGRESS
+        # Stuck means the error has stayed within one band for the whole window (a target that
+        # has just jumped away, or a chain bouncing off something, moves the error a lot), or
+        # its fall is dying out far from the target.
+        errors = self._errors
+        stuck = max(errors) - min(errors) < PROGRESS or self._fading(error)
         return stuck and pushing()
+
+    def _fading(self, error: float) -> bool:
+        """Whether the error still falls but is coming to rest well short of the target: a
+        chain sliding along an obstacle it presses on, slower and slower.
+
+        The falls over the window's thirds, ``early``, ``middle`` and ``late``, must shrink
+        steadily; the last two are taken as terms of a geometric series, whose rest,
+        ``late**2 / (middle - late)``, is the progress still to come. An approach that brakes
+        to a stop on the target (at a constant deceleration, or exponentially) projects at
+        least the way it has left; a chain sliding on at a steady pace projects far more.
+        """
+        errors = self._errors
+        third = len(errors) // 3
+        early = errors[0] - errors[third]
+        middle = errors[third] - errors[2 * third]
+        late = errors[2 * third] - error
+        if not 0.0 < late < middle < early or late * early < STEADY * middle * middle:
+            return False
+        way = error - self._near
+        if errors[0] - error >= SLOW * way or late * late / (middle - late) >= FADING * way:
+            return False
+        return all(b - a <= RISE for a, b in pairwise(errors))

@@ -28,6 +28,33 @@ def test_a_target_that_jumps_away_is_not_lost_ground():
     assert not any(_run(BlockWatch(dt=0.01, arrival=0.5), errors))
 
 
+def test_a_slide_that_dies_out_short_of_the_target_is_blocked_before_it_stops():
+    # A chain pressing on an obstacle slides along it, slower and slower, toward a rest 100 px
+    # short; its error still falls by more than the band within every window.
+    t = np.arange(0, 4, 0.01)
+    flags = _run(BlockWatch(dt=0.01, arrival=0.5), 100 + 150 * np.exp(-t / 0.8))
+    first = flags.index(True)
+    assert 1.5 < t[first] < 3.0
+    slide = 150 * np.exp(-t[first] / 0.8)
+    assert slide > 2.0  # still falling more than the band over the window
+
+
+def test_braking_onto_the_target_and_a_steady_slide_are_not_blocked():
+    t = np.arange(0, 4, 0.01)
+    assert not any(_run(BlockWatch(dt=0.01, arrival=0.5), 250 * np.exp(-t / 0.8)))
+    braking = np.maximum(0.0, 4.0 - t) ** 2 * 20  # constant deceleration, stopping on it at 4 s
+    assert not any(_run(BlockWatch(dt=0.01, arrival=0.5), braking))
+    # Swung in fast, hit a rock at 1 s, then slides along it at a steady 20 px/s.
+    hit = np.where(t < 1.0, 400 - 300 * t, 100 - 20 * (t - 1.0))
+    assert not any(_run(BlockWatch(dt=0.01, arrival=0.5), hit))
+
+
+def test_a_fading_swing_is_not_a_slide_coming_to_rest():
+    t = np.arange(0, 4, 0.01)
+    swing = 100 + 150 * np.exp(-t / 0.8) + 3.0 * np.sin(2 * np.pi * t / 0.3)
+    assert not any(_run(BlockWatch(dt=0.01, arrival=0.5), swing))
+
+
 def test_a_jammed_arm_reports_blocked_holds_and_tries_again_when_the_target_moves():
     level = Level.model_validate(
         {
