@@ -384,7 +384,9 @@ class Simulation:
                     or self.world.touching()
                 )
 
-            if self._watch.observe(error=error, reachable=reachable, pushing=pushing):
+            if self._watch.observe(
+                error=error, reachable=reachable, pushing=pushing, touching=self.world.touching
+            ):
                 self._blocked_target = target.copy() if isinstance(target, np.ndarray) else target
                 self.controller.hold(self.world.joint_angles())
         if self._blocked_target is not None:

@@ -66,23 +66,35 @@ class BlockWatch:
         """Forget the history: the target moved, so progress is measured afresh."""
         self._errors.clear()
 
-    def observe(self, *, error: float, reachable: bool, pushing: Callable[[], bool]) -> bool:
+    def observe(
+        self,
+        *,
+        error: float,
+        reachable: bool,
+        pushing: Callable[[], bool],
+        touching: Callable[[], bool] | None = None,
+    ) -> bool:
         """Record one tick and say whether the chain is blocked now.
 
         ``error`` is the end effector's distance to the target (px), ``reachable`` whether the
         solver has not given the target up as out of reach; ``pushing()`` says whether a motor
-        is at its torque limit or a link touches something, and is asked only once the error
-        has stopped moving (a contact query on every tick would cost more than the rest).
+        is at its torque limit or a link touches something, and ``touching()`` (if given)
+        whether a link touches something. Each is asked only once the error has stopped
+        moving, or its fall is dying out (a contact query on every tick would cost more than
+        the rest).
         """
         self._errors.append(error)
         if not reachable or error <= self._near or len(self._errors) < self._errors.maxlen:
             return False
         # Stuck means the error has stayed within one band for the whole window (a target that
-        # has just jumped away, or a chain bouncing off something, moves the error a lot), or
-        # its fall is dying out far from the target.
+        # has just jumped away, or a chain bouncing off something, moves the error a lot).
         errors = self._errors
-        stuck = max(errors) - min(errors) < PROGRESS or self._fading(error)
-        return stuck and pushing()
+        if max(errors) - min(errors) < PROGRESS:
+            return pushing()
+        # Or its fall is dying out far from the target against something it touches. Not for
+        # a motor at its torque limit: a weak arm lifting itself slows down and speeds up again
+        # as the load on it changes.
+        return touching is not None and self._fading(error) and touching()
 
     def _fading(self, error: float) -> bool:
         """Whether the error still falls but is coming to rest well short of the target: a
