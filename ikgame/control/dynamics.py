@@ -590,13 +590,15 @@ def ease(
     ([-1.0, -1.1, 0.0], [-4.1, -3.2, 0.5], [False, False, True])
     """
     held = bias[0][binding]
+    if not abs(held) >= EASED_LOAD * limits[binding]:
+        return None
     over = held + push[0][binding]
     unit = turning([1.0 if k == binding else 0.0 for k in range(len(wanted))])[0]
     easing = [
         k < binding and u * w * over < 0.0
         for k, (u, w) in enumerate(zip(unit, wanted, strict=True))
     ]
-    if not any(easing) or not abs(held) >= EASED_LOAD * limits[binding]:
+    if not any(easing):
         return None
     eased = turning([w if e else 0.0 for w, e in zip(wanted, easing, strict=True)])
     start, rest = plus_loads(bias, eased, 1.0), plus_loads(push, eased, -1.0)
