@@ -13,7 +13,15 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ikgame.control.dynamics import ChainInertia, ListLoads, at_limits, give_way, plus_loads
+from ikgame.control.dynamics import (
+    ChainInertia,
+    ListLoads,
+    at_limits,
+    ease,
+    give_way,
+    listed_factor,
+    plus_loads,
+)
 
 Loads = ListLoads
 """Joint torques, then the x and y of the pivot forces, per joint."""
@@ -290,6 +298,7 @@ def fit_floats(
     limits: list[float],
     head: Callable[[int], Loads] | None = None,
     weak: tuple[list[bool], Callable[[int], Loads]] | None = None,
+    turning: Callable[[list[float]], Loads] | None = None,
 ) -> tuple[list[float], Loads, list[bool], bool]:
     """:func:`~ikgame.control.dynamics.fit_drive` over lists: the accelerations, the loads,
     which joints are saturated, and whether the loads are those of the motion."""
@@ -310,49 +319,33 @@ def fit_floats(
             return *gave, True
     scale, binding = None, 0
     if all(abs(b) <= lim for b, lim in zip(bias[0], limits, strict=True)):
-        scale, binding = _largest_factor(bias[0], push[0], limits)
+        scale, binding = listed_factor(bias[0], push[0], limits)
     if head is not None and scale is not None and binding < len(limits) - 1:
         near = head(binding)
         start = plus_loads(bias, near, 1.0)
         rest = plus_loads(push, near, -1.0)
-        tail, _ = _largest_factor(start[0], rest[0], limits)
+        tail, _ = listed_factor(start[0], rest[0], limits)
         lead: float | None = 1.0
         if tail is None:
             # As in fit_drive: the joints up to it scaled with the rest coasting, then the rest.
-            lead, _ = _largest_factor(bias[0], near[0], limits)
+            lead, _ = listed_factor(bias[0], near[0], limits)
             if lead is not None:
                 start = plus_loads(bias, near, lead)
-                tail, _ = _largest_factor(start[0], rest[0], limits)
+                tail, _ = listed_factor(start[0], rest[0], limits)
         if tail is not None and lead is not None:
             accelerations = [w * lead if j <= binding else w * tail for j, w in enumerate(wanted)]
             loads = plus_loads(start, rest, tail)
             return accelerations, loads, at_limits(loads[0], limits), True
     if scale is not None:
+        if turning is not None and scale < 1.0:
+            eased = ease(bias, push, wanted, limits, binding, scale, turning)
+            if eased is not None:
+                return *eased, True
         loads = plus_loads(bias, push, scale)
         return [scale * w for w in wanted], loads, at_limits(loads[0], limits), True
     bt, bx, by = bias
     loads = ([min(max(b, -lim), lim) for b, lim in zip(bt, limits, strict=True)], bx, by)
     return wanted, loads, at_limits(loads[0], limits), False
-
-
-def _largest_factor(
-    bias: list[float], push: list[float], limits: list[float]
-) -> tuple[float | None, int]:
-    """The dynamics module's ``_largest_factor`` over lists of torques."""
-    low, high, holds, binding = -math.inf, math.inf, True, 0
-    for j, (b, s, lim) in enumerate(zip(bias, push, limits, strict=True)):
-        if s != 0.0:
-            to_upper, to_lower = (lim - b) / s, (-lim - b) / s
-            low = max(low, min(to_upper, to_lower))
-            most = max(to_upper, to_lower)
-            if most < high:
-                high, binding = most, j
-        elif not abs(b) <= lim:
-            holds = False
-    # The largest factor up to 1 that every joint allows, as in fit_drive.
-    if holds and low <= high and low <= 1.0 and high >= 0.0:
-        return min(1.0, high), binding
-    return None, binding
 
 
 def damped_rates(

@@ -19,7 +19,9 @@ This servo instead:
    solver would have to find the torques of a long chain by itself in a few iterations, and it
    does not: a 30-link chain never settles. A joint that stalled, or that gravity overloads,
    gives way at its limit where the motion needs more of it, rather than set the one factor
-   every other joint's acceleration is scaled by (:func:`~ikgame.control.dynamics.give_way`).
+   every other joint's acceleration is scaled by (:func:`~ikgame.control.dynamics.give_way`);
+   the joints nearer the base whose accelerations ease the joint that sets that factor keep
+   them whole (:func:`~ikgame.control.dynamics.ease`).
 
 Units: radians, rad/s, px, s, torques mass px^2/s^2.
 """
@@ -60,9 +62,10 @@ numpy arrays: the same numbers either way, whichever is faster."""
 SECTION_LINKS: Final = 30
 """Chains (and trees) longer than this, when a joint runs out of torque, keep the wanted
 accelerations of the joints up to it and scale only those beyond it; shorter ones scale every
-joint's by one factor, which keeps the motion's direction (see :func:`fit_drive`). One factor
-set by the base of 200 links leaves every joint a few percent of its wanted acceleration, tick
-after tick, and the chain swings under gravity as if unpowered."""
+joint's by one factor, which keeps the motion's direction, but for those nearer the base that
+ease the joint that runs out (see :func:`fit_drive`). One factor set by the base of 200 links
+leaves every joint a few percent of its wanted acceleration, tick after tick, and the chain
+swings under gravity as if unpowered."""
 
 BRAKE_SHARE: Final = 0.5
 """Share of a joint's spare torque the velocity profile plans to brake with: the rest is margin
@@ -269,6 +272,10 @@ class Servo:
             return pose.loads(alpha=along((joints == k).astype(float)))
 
         weak = (_weak(stalled.tolist(), hold.torques.tolist(), self._limits), alone)
+
+        def turning(accelerations: np.ndarray) -> JointLoads:
+            return pose.loads(alpha=along(accelerations))
+
         drive = fit_drive(
             hold + pose.loads(omega=along(velocities)),
             push,
@@ -276,12 +283,13 @@ class Servo:
             self.max_torque,
             head,
             weak,
+            turning,
         )
         if not drive.consistent:
             # Moving faster than the motors can hold (after a knock, say): feeding forward the
             # swing's own loads, clipped, would fight the pivots and fling a long chain apart.
             # Gravity and the wanted acceleration alone, and pymunk's pivots find the rest.
-            drive = fit_drive(hold, push, wanted_acceleration, self.max_torque, head, weak)
+            drive = fit_drive(hold, push, wanted_acceleration, self.max_torque, head, weak, turning)
         self._remember(drive.saturated.tolist(), drive.loads.torques.tolist(), error.tolist())
         return ServoCommand(
             rates=velocities + drive.accelerations * dt,
@@ -401,11 +409,13 @@ class Servo:
 
         weak = (_weak(stalled, held, limits), alone)
         reached, loads, saturated, consistent = fit_floats(
-            coasting, push, accelerations, limits, head, weak
+            coasting, push, accelerations, limits, head, weak, pose.turning
         )
         if not consistent:
             # See command: gravity and the wanted acceleration alone, pymunk's pivots the rest.
-            reached, loads, saturated, _ = fit_floats(hold, push, accelerations, limits, head, weak)
+            reached, loads, saturated, _ = fit_floats(
+                hold, push, accelerations, limits, head, weak, pose.turning
+            )
         torques = loads[0]
         self._remember(saturated, torques, errors)
         return ServoCommand(

@@ -451,3 +451,60 @@ def test_giving_way_over_floats_gives_the_same_numbers():
     assert list(reached) == drive.accelerations.tolist()
     assert loads[0] == drive.loads.torques.tolist()
     assert saturated == drive.saturated.tolist() and consistent
+
+
+def test_a_joint_nearer_the_base_that_eases_the_one_at_its_limit_keeps_its_acceleration():
+    # Four links hanging bent, the third joint held by gravity at 0.99 of its limit. The base
+    # brakes, which eases that joint, and the second joint's acceleration loads it. Scaled by
+    # one factor with the rest, the base's braking gave back the room it made, and the second
+    # joint got 1% of its acceleration. The last joint eases it too, but by its reaction, from
+    # beyond it: kept whole, such joints prop a joint up and whip the light links beyond it.
+    arm = ChainInertia(np.full(4, 60.0), np.full(4, 0.8), np.full(4, 0.8 * 60.0**2 / 12))
+    world = np.radians([-60.0, -30.0, -80.0, -90.0])
+    pose = Pose(arm, world)
+    bias = pose.loads(gravity=(0.0, -1200.0))
+    limit = np.array([1e7, 1e7, abs(bias.torques[2]) / 0.99, 1e7])
+    wanted = np.array([-0.4, 2.0, 0.0, -1.0])
+    push = pose.loads(alpha=arm.along(wanted))
+
+    def turning(accelerations):
+        return pose.loads(alpha=arm.along(accelerations))
+
+    def unit(k):
+        return turning(np.eye(4)[k])
+
+    eases = unit(2).torques * wanted * np.sign(bias.torques[2] + push.torques[2]) < 0.0
+    assert eases.tolist() == [True, False, False, True]
+    one = fit_drive(bias, push, wanted, limit)
+    scale = one.accelerations[1] / wanted[1]
+    assert scale < 0.02 and one.accelerations[0] == pytest.approx(scale * wanted[0])
+    drive = fit_drive(bias, push, wanted, limit, turning=turning)
+    assert drive.consistent and drive.saturated.tolist() == [False, False, True, False]
+    assert drive.accelerations[0] == wanted[0]
+    factor = drive.accelerations[1] / wanted[1]
+    assert factor > 10 * scale
+    assert drive.accelerations[3] / wanted[3] == pytest.approx(factor)
+    assert np.all(np.abs(drive.loads.torques) <= limit * (1 + 1e-9))
+    again = pose.loads(alpha=arm.along(drive.accelerations), gravity=(0.0, -1200.0))
+    np.testing.assert_allclose(again.torques, drive.loads.torques, rtol=1e-9, atol=1e-6)
+    np.testing.assert_allclose(again.forces, drive.loads.forces, rtol=1e-9, atol=1e-6)
+    # The float path keeps the same acceleration whole, to the last bit.
+    fast = FloatInertia(arm).pose(world)
+    reached, loads, saturated, consistent = fit_floats(
+        fast.loads(gravity=(0.0, -1200.0)),
+        fast.turning(wanted.tolist()),
+        wanted.tolist(),
+        limit.tolist(),
+        turning=fast.turning,
+    )
+    assert list(reached) == drive.accelerations.tolist()
+    assert loads[0] == drive.loads.torques.tolist()
+    assert saturated == drive.saturated.tolist() and consistent
+    # Held at 0.4 of a larger limit, with the motion itself overloading it, that joint keeps
+    # the one factor: the motion's direction.
+    limit[2] = abs(bias.torques[2]) / 0.4
+    harder = pose.loads(alpha=arm.along(3.0 * wanted))
+    one = fit_drive(bias, harder, 3.0 * wanted, limit)
+    assert one.saturated[2] and one.accelerations[0] > 3.0 * wanted[0]
+    drive = fit_drive(bias, harder, 3.0 * wanted, limit, turning=turning)
+    assert drive.accelerations.tolist() == one.accelerations.tolist()

