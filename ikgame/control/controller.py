@@ -374,8 +374,15 @@ class Controller:
         if moved:
             # The goal may be within the torque budget now: stalled joints try again.
             servo.retry()
+        steered = self.avoider is not None and not self.avoider.idle
         drive = servo.command(
-            error, self.skeleton.world_angles(measured), velocities, gravity, dt, goal_rates
+            error,
+            self.skeleton.world_angles(measured),
+            velocities,
+            gravity,
+            dt,
+            goal_rates,
+            steered=steered,
         )
         return Command(solution, drive.rates, drive)
 

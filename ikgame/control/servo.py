@@ -183,17 +183,24 @@ class Servo:
         gravity: tuple[float, float] | np.ndarray,
         dt: float,
         goal_rates: np.ndarray | None = None,
+        *,
+        steered: bool = False,
     ) -> ServoCommand:
         """One tick's command from each joint's angle ``error`` (radians) and the measured pose.
 
         ``world_angles`` are per link (radians), ``velocities`` per joint (child - parent,
         rad/s), ``gravity`` px/s^2 and ``dt`` the tick, s. ``goal_rates`` (rad/s) is how fast
         the desired angles themselves move, when they follow a moving target: the servo moves
-        with them and closes the error on top, instead of lagging behind.
+        with them and closes the error on top, instead of lagging behind. ``steered`` says the
+        goal is a pose on a way planned round obstacles: the motion keeps its direction when a
+        joint runs out of torque (one factor for all, none kept whole by
+        :func:`~ikgame.control.dynamics.ease`), since only the lines of the way were checked
+        clear. Eased off its line, twenty links following their way out from under a shelf
+        caught on it.
         """
         if self._floats is not None:
             return self._command_floats(
-                self._floats, error, world_angles, velocities, gravity, dt, goal_rates
+                self._floats, error, world_angles, velocities, gravity, dt, goal_rates, steered
             )
         along = self.inertia.along
         pose = Pose(self.inertia, world_angles)
@@ -276,6 +283,7 @@ class Servo:
         def turning(accelerations: np.ndarray) -> JointLoads:
             return pose.loads(alpha=along(accelerations))
 
+        easing = None if steered else turning
         drive = fit_drive(
             hold + pose.loads(omega=along(velocities)),
             push,
@@ -283,13 +291,13 @@ class Servo:
             self.max_torque,
             head,
             weak,
-            turning,
+            easing,
         )
         if not drive.consistent:
             # Moving faster than the motors can hold (after a knock, say): feeding forward the
             # swing's own loads, clipped, would fight the pivots and fling a long chain apart.
             # Gravity and the wanted acceleration alone, and pymunk's pivots find the rest.
-            drive = fit_drive(hold, push, wanted_acceleration, self.max_torque, head, weak, turning)
+            drive = fit_drive(hold, push, wanted_acceleration, self.max_torque, head, weak, easing)
         self._remember(drive.saturated.tolist(), drive.loads.torques.tolist(), error.tolist())
         return ServoCommand(
             rates=velocities + drive.accelerations * dt,
@@ -307,6 +315,7 @@ class Servo:
         gravity: tuple[float, float] | np.ndarray,
         dt: float,
         goal_rates: np.ndarray | None,
+        steered: bool,
     ) -> ServoCommand:
         """:meth:`command` joint by joint over floats: the same steps, the same numbers."""
         pose = tree.pose(world_angles)
@@ -408,13 +417,14 @@ class Servo:
             return pose.turning([1.0 if j == k else 0.0 for j in range(count)])
 
         weak = (_weak(stalled, held, limits), alone)
+        easing = None if steered else pose.turning
         reached, loads, saturated, consistent = fit_floats(
-            coasting, push, accelerations, limits, head, weak, pose.turning
+            coasting, push, accelerations, limits, head, weak, easing
         )
         if not consistent:
             # See command: gravity and the wanted acceleration alone, pymunk's pivots the rest.
             reached, loads, saturated, _ = fit_floats(
-                hold, push, accelerations, limits, head, weak, pose.turning
+                hold, push, accelerations, limits, head, weak, easing
             )
         torques = loads[0]
         self._remember(saturated, torques, errors)

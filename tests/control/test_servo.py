@@ -5,8 +5,9 @@ import math
 import numpy as np
 import pytest
 
+from ikgame.control import _floats, dynamics
 from ikgame.control._floats import FloatInertia
-from ikgame.control.dynamics import ChainInertia
+from ikgame.control.dynamics import ChainInertia, Pose
 from ikgame.control.servo import BRAKE_FLOOR, Servo
 from ikgame.kinematics import forward_kinematics
 from ikgame.level.model import Level
@@ -314,3 +315,28 @@ def test_loads_the_servo_skips_are_within_half_the_smallest_room(parents):
             torques = np.array(pose.loads(alpha=floats.along(accelerations))[0])
             assert np.all(np.abs(torques) <= room / 2)
     assert min(skipped) > 20 and max(skipped) < 380  # both ways taken
+
+
+@pytest.mark.parametrize("floats", [True, False], ids=["floats", "numpy"])
+def test_a_goal_on_a_planned_way_keeps_the_motion_s_direction(floats, monkeypatch):
+    # Four links hanging bent, the third joint held by gravity at 0.99 of its limit: the
+    # motion sets the one factor there, and the base's acceleration, which eases that joint,
+    # would be kept whole. On a way planned round obstacles only the lines were checked clear,
+    # so a steered goal keeps one factor for all: what the servo commands with no easing.
+    arm = ChainInertia(np.full(4, 60.0), np.full(4, 0.8), np.full(4, 0.8 * 60.0**2 / 12))
+    world = np.radians([-60.0, -30.0, -80.0, -90.0])
+    held = abs(Pose(arm, world).loads(gravity=(0.0, -1200.0)).torques[2])
+    limit = np.array([1e7, 1e7, held / 0.99, 1e7])
+    error, velocities = np.array([0.23, -0.39, -0.11, 0.02]), np.array([-0.3, 0.3, 1.0, 1.8])
+
+    def rates(**steered):
+        servo = Servo(arm, max_torque=limit, max_speed=np.full(4, 5.0), gain=12.0)
+        if not floats:
+            servo._floats = None  # the numpy path, as chains longer than FLOAT_LINKS take
+        return servo.command(error, world, velocities, (0.0, -1200.0), 1 / 240, **steered).rates
+
+    eased, steered = rates(), rates(steered=True)
+    monkeypatch.setattr(dynamics, "ease", lambda *args: None)
+    monkeypatch.setattr(_floats, "ease", lambda *args: None)
+    assert steered.tolist() == rates().tolist()
+    assert abs(eased[0] - velocities[0]) > 10 * abs(steered[0] - velocities[0])
