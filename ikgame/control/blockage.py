@@ -36,11 +36,6 @@ SLOW: Final = 0.1
 """...and it closed less than this share of its way to go over the window: a chain still
 closing fast may yet round what it slides along."""
 
-STEADY: Final = 0.5
-"""A dying fall shrinks by about the same ratio from each third of the window to the next: the
-later ratio at least this share of the earlier. A chain that swung free and then hit something
-fell far faster before the hit."""
-
 RISE: Final = 0.05
 """A dying fall's error rises by at most this much from one tick to the next, px: more is a
 swing, not a slide coming to rest."""
@@ -100,20 +95,20 @@ class BlockWatch:
         """Whether the error still falls but is coming to rest well short of the target: a
         chain sliding along an obstacle it presses on, slower and slower.
 
-        The falls over the window's thirds, ``early``, ``middle`` and ``late``, must shrink
-        steadily; the last two are taken as terms of a geometric series, whose rest,
+        The falls over the window's thirds, ``early``, ``middle`` and ``late``, must shrink;
+        the last two are taken as terms of a geometric series, whose rest,
         ``late**2 / (middle - late)``, is the progress still to come. An approach that brakes
         to a stop on the target (at a constant deceleration, or exponentially) projects at
         least the way it has left; a chain sliding on at a steady pace projects far more.
         """
         errors = self._errors
-        third = len(errors) // 3
-        early = errors[0] - errors[third]
-        middle = errors[third] - errors[2 * third]
-        late = errors[2 * third] - error
-        if not 0.0 < late < middle < early or late * early < STEADY * middle * middle:
+        # Thirds of equal length, ending now: the window's ticks need not divide by three.
+        third = (len(errors) - 1) // 3
+        start, one, two = (errors[-1 - k * third] for k in (3, 2, 1))
+        early, middle, late = start - one, one - two, two - error
+        if not 0.0 < late < middle < early:
             return False
         way = error - self._near
-        if errors[0] - error >= SLOW * way or late * late / (middle - late) >= FADING * way:
+        if start - error >= SLOW * way or late * late / (middle - late) >= FADING * way:
             return False
         return all(b - a <= RISE for a, b in pairwise(errors))

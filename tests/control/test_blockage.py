@@ -63,6 +63,14 @@ def test_braking_onto_the_target_and_a_steady_slide_are_not_blocked():
     assert not any(_run(BlockWatch(dt=0.01, arrival=0.5), hit))
 
 
+def test_a_slow_crawl_that_barely_slows_is_not_blocked():
+    # Sliding along something at 15 px/s, slowing by 0.5 px/s each second: a tenth of its way
+    # in half a second is out of its reach, but the way it still makes adds up to the target.
+    t = np.arange(0, 4, 0.01)
+    crawl = 200 - 15 * t + 0.25 * t**2
+    assert not any(_run(BlockWatch(dt=0.01, arrival=0.5), crawl))
+
+
 def test_a_fading_swing_is_not_a_slide_coming_to_rest():
     t = np.arange(0, 4, 0.01)
     swing = 100 + 150 * np.exp(-t / 0.8) + 3.0 * np.sin(2 * np.pi * t / 0.3)
