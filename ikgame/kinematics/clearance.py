@@ -76,6 +76,7 @@ __all__ = [
     "LEAD",
     "RANDOM_SEEDS",
     "RANDOM_POOL",
+    "STOP_ROOM",
     "CHECK_UNITS",
     "ITERATION_UNITS",
     "POSE_UNITS",
@@ -122,6 +123,11 @@ RANDOM_POOL: Final = 400
 RANDOM_SEED: Final = 7193
 """Seed of the generators of random seeds and route samples: the same inputs give the same
 answers."""
+
+STOP_ROOM: Final = 0.05
+"""Share of a joint's range (within a turn) a clear answer keeps off each limit to count as off
+its stops: an answer with a joint nearer a stop than that is taken only when no clear answer off
+them is found (a fold pressed against a stop under a shelf leaves the chain no short way on)."""
 
 POLISH_ITERATIONS: Final = 80
 """Iterations one seed of a clear answer is polished for."""
@@ -569,6 +575,22 @@ class Clearance:
         # link hooked round an obstacle's end); one already near reaching the target rarely does.
         return list(sk.clamp(pool[np.lexsort((misses, ~clear))[:RANDOM_SEEDS]]))
 
+    def off_stops(self, angles: np.ndarray) -> bool:
+        """Whether every limited joint of ``angles`` keeps ``STOP_ROOM`` of its range (within a
+        turn) off both its limits.
+
+        >>> arm = Skeleton.chain([100.0, 100.0], limits=[(-1.0, 1.0), (-1.0, 1.0)])
+        >>> room = Clearance(arm, np.full(2, 5.0), Obstacles.from_arrays(np.empty((0, 5)), np.empty((0, 3))))
+        >>> room.off_stops(np.array([0.5, -0.85])), room.off_stops(np.array([0.5, -0.95]))
+        (True, False)
+        """
+        sk = self.skeleton
+        low = np.maximum(sk.lower, -math.pi)
+        high = np.minimum(sk.upper, math.pi)
+        room = STOP_ROOM * (high - low)
+        inside = (angles >= low + room) & (angles <= high - room)
+        return bool(np.all(inside | ~sk.limited))
+
     def clear_answer(
         self,
         measured: np.ndarray,
@@ -614,6 +636,9 @@ class Clearance:
         measured = np.asarray(measured, float)
         found: list[np.ndarray] = []
         short: list[Solution] = []
+        # The first answer on a stop the chain can turn to in a straight clear line: taken only
+        # if no answer off the stops is found.
+        pressed: np.ndarray | None = None
         for drawn in (False, True):
             if drawn:
                 # Drawing and measuring the pool of random seeds, counted as that many poses
@@ -630,9 +655,18 @@ class Clearance:
                     if self.is_clear(sol.angles):
                         short.append(sol)
                     continue
-                if (yield from self._checking(measured, sol.angles)):
-                    return sol.angles, True, False
+                free = self.off_stops(sol.angles)
+                if (free or pressed is None) and (yield from self._checking(measured, sol.angles)):
+                    if free:
+                        return sol.angles, True, False
+                    pressed = sol.angles
+                    continue
                 found.append(sol.angles)
+        roomy = [pose for pose in found if self.off_stops(pose)]
+        if roomy:
+            return min(roomy, key=lambda pose: float(np.abs(pose - measured).sum())), False, False
+        if pressed is not None:
+            return pressed, True, False
         if not found and short and not isinstance(target, TargetSet):
             # Close by an obstacle the polish can stall a px short, the pull on the end balanced
             # by the push off the obstacle. From the nearest such pose the end is taken onto the
@@ -839,6 +873,10 @@ class Clearance:
         # The via poses the chain passes before the cut.
         passed = way[: int(np.searchsorted(np.cumsum([len(p) for p in pieces]), nearest, "right"))]
         near = yield from self._polishing(cut, target, POLISH_ITERATIONS, tolerance, True)
+        if self.off_stops(way[-1]) and not self.off_stops(near.angles):
+            # The goal was chosen off the stops (see _answering): a fold polished back against
+            # one would undo that choice.
+            return way
         if near.status is SolveStatus.SUCCESS and (yield from self._checking(cut, near.angles)):
             return [*passed, cut, near.angles]
         # Checked from the goal, as the route's tree from the goal checks its pieces: a goal
@@ -1350,13 +1388,20 @@ class Avoider:
         nearest it (a jammed plan)."""
         room = self.clearance
         start = np.array(start, dtype=float)
-        if goal is not None:
+        if goal is not None and room.off_stops(goal):
             plan = yield from self._rerouting(start, goal, tolerance, target)
             if plan is not None:
                 return plan
             # The solver's clear answer can lie where no clear way leads (a fold the joint
             # limits shut in behind an obstacle); an answer polished from the seeds may not.
+            goal = None
         found = yield from room._answering(start, answer, target, tolerance)
+        if goal is not None and (found is None or not room.off_stops(found[0])):
+            # The solver's clear answer on a stop, and no clear answer off the stops found: the
+            # way to the solver's, as before, if there is one.
+            plan = yield from self._rerouting(start, goal, tolerance, target)
+            if plan is not None:
+                return plan
         if found is None:
             return None
         goal, straight, jammed = found
