@@ -873,10 +873,6 @@ class Clearance:
         # The via poses the chain passes before the cut.
         passed = way[: int(np.searchsorted(np.cumsum([len(p) for p in pieces]), nearest, "right"))]
         near = yield from self._polishing(cut, target, POLISH_ITERATIONS, tolerance, True)
-        if self.off_stops(way[-1]) and not self.off_stops(near.angles):
-            # The goal was chosen off the stops (see _answering): a fold polished back against
-            # one would undo that choice.
-            return way
         if near.status is SolveStatus.SUCCESS and (yield from self._checking(cut, near.angles)):
             return [*passed, cut, near.angles]
         # Checked from the goal, as the route's tree from the goal checks its pieces: a goal
