@@ -17,7 +17,7 @@ width). A chain aims its end effector at a point; a tree aims a
   the answer with its bends reversed, poses curled either way, ``RANDOM_SEEDS`` random poses
   within the limits, the nearest the target of ``RANDOM_POOL`` drawn) and keeps the clear one
   that arrives nearest the measured pose, preferring one the chain can turn to in a straight
-  line.
+  line, and before either one that keeps every joint ``STOP_ROOM`` off its stops.
 - **a clear path** (:meth:`Clearance.route`): the motors turn every joint toward its goal
   together, so the chain moves close to the straight line in joint space. When that line sweeps
   through an obstacle (checked at poses no point of the chain moves more than ``PATH_STEP``
@@ -579,9 +579,10 @@ class Clearance:
         """Whether every limited joint of ``angles`` keeps ``STOP_ROOM`` of its range (within a
         turn) off both its limits.
 
-        >>> arm = Skeleton.chain([100.0, 100.0], limits=[(-1.0, 1.0), (-1.0, 1.0)])
-        >>> room = Clearance(arm, np.full(2, 5.0), Obstacles.from_arrays(np.empty((0, 5)), np.empty((0, 3))))
-        >>> room.off_stops(np.array([0.5, -0.85])), room.off_stops(np.array([0.5, -0.95]))
+        >>> arm = Skeleton.chain([100.0, 100.0], limits=[None, (-1.0, 1.0)])
+        >>> post = Obstacles.from_arrays(np.empty((0, 5)), np.array([[0.0, 250.0, 10.0]]))
+        >>> room = Clearance(arm, np.full(2, 5.0), post)
+        >>> room.off_stops(np.array([3.1, -0.85])), room.off_stops(np.array([0.0, -0.95]))
         (True, False)
         """
         sk = self.skeleton
@@ -602,7 +603,10 @@ class Clearance:
         no seed found one.
 
         Among the seeds' polished poses, the first the skeleton can turn to in a straight clear
-        line wins; otherwise the clear one nearest ``measured`` in joint space. When no seed of a
+        line wins; otherwise the clear one nearest ``measured`` in joint space. Poses with a joint
+        on its stop (within ``STOP_ROOM``, see :meth:`off_stops`) count only when no seed
+        arrives off the stops: a fold pressed against a stop under a shelf, a straight turn
+        away, left five links a 3 s route from a target a little deeper in. When no seed of a
         chain arrives, the clear one that came nearest is taken onto the target with the
         obstacles ignored and polished off them again (a polish close by an obstacle can stall
         a px short, the pull on the end balanced by the push off it).
@@ -1381,7 +1385,8 @@ class Avoider:
     ) -> _Work[_Plan | None]:
         """The search for a target: a route to ``goal``, else (or when it is None) to a clear
         answer, else, when the obstacles keep every clear pose from the target, to the clear pose
-        nearest it (a jammed plan)."""
+        nearest it (a jammed plan). A ``goal`` with a joint on its stop comes after a clear
+        answer off the stops (see :meth:`Clearance.clear_answer`), before any on them."""
         room = self.clearance
         start = np.array(start, dtype=float)
         if goal is not None and room.off_stops(goal):
@@ -1391,13 +1396,15 @@ class Avoider:
             # The solver's clear answer can lie where no clear way leads (a fold the joint
             # limits shut in behind an obstacle); an answer polished from the seeds may not.
             goal = None
+        # The solver's clear answer on a stop: a way to it is searched for only when no clear
+        # answer off the stops is found, or no way to one.
+        pressed = goal
         found = yield from room._answering(start, answer, target, tolerance)
-        if goal is not None and (found is None or not room.off_stops(found[0])):
-            # The solver's clear answer on a stop, and no clear answer off the stops found: the
-            # way to the solver's, as before, if there is one.
-            plan = yield from self._rerouting(start, goal, tolerance, target)
+        if pressed is not None and (found is None or not room.off_stops(found[0])):
+            plan = yield from self._rerouting(start, pressed, tolerance, target)
             if plan is not None:
                 return plan
+            pressed = None
         if found is None:
             return None
         goal, straight, jammed = found
@@ -1407,7 +1414,10 @@ class Avoider:
             return goal, [goal], arrival, jammed
         if jammed:
             return (yield from self._jamming(start, goal, target, tolerance))
-        return (yield from self._rerouting(start, goal, arrival, target))
+        plan = yield from self._rerouting(start, goal, arrival, target)
+        if plan is None and pressed is not None:
+            plan = yield from self._rerouting(start, pressed, tolerance, target)
+        return plan
 
     def _jamming(
         self,

@@ -968,3 +968,71 @@ def test_capped_work_gives_up_once_past_its_units():
         while True:
             steps.append(next(capped))
     assert stop.value.value is None and len(steps) == 4
+
+
+def _left_shelf_room() -> Clearance:
+    """Five 90 px links (limits +-150 deg) mounted straight up over a floor, a shelf 130 px up
+    to the left from x = -110 px (the stress level with five links under a shelf to the left)."""
+    limit = math.radians(150.0)
+    arm = Skeleton.chain([90.0] * 5, base_angle=UP, limits=[(-limit, limit)] * 5)
+    obstacles = Obstacles.from_arrays(
+        np.array([[-600.0, -20.0, 600.0, -20.0, 0.0], [-450.0, 130.0, -110.0, 130.0, 6.0]]),
+        NO_CIRCLES,
+    )
+    return Clearance(arm, np.full(5, 6.0), obstacles)
+
+
+UNDER_SHELF = np.radians([42.0, -16.0, -86.0, -129.0, -36.0])  # the tip low under its end
+DEEPER = np.array([-220.0, 50.0])
+
+
+def test_a_clear_answer_on_a_stop_is_taken_only_when_none_off_the_stops_is_found(monkeypatch):
+    room = _left_shelf_room()
+    answer = np.radians([67.0, -15.0, -116.0, -150.0, -50.0])  # through the shelf
+    found = room.clear_answer(UNDER_SHELF, answer, DEEPER, 0.5)
+    # The clear answer a straight turn away is a fold with its third joint on its stop, from
+    # which a target deeper under the shelf was 3 s of route away: one off the stops is taken.
+    assert room.off_stops(found) and room.is_clear(found)
+    assert room.misses(found, DEEPER)[0] <= 0.5
+    monkeypatch.setattr(Clearance, "off_stops", lambda self, angles: False)
+    pressed = room.clear_answer(UNDER_SHELF, answer, DEEPER, 0.5)
+    # With none off the stops, the first one the chain can turn to in a straight line it is.
+    assert room.path_clear(UNDER_SHELF, pressed) and room.misses(pressed, DEEPER)[0] <= 0.5
+
+
+def test_a_solvers_clear_answer_on_a_stop_is_routed_to_only_when_none_off_the_stops_is_found(
+    monkeypatch,
+):
+    room = _left_shelf_room()
+    start = np.radians([33.0, 4.0, -99.0, -124.0, -42.0])
+    answer = np.radians([60.0, 2.0, -131.0, -150.0, -51.0])  # clear, its fourth joint on its stop
+    assert room.is_clear(answer) and not room.path_clear(start, answer)
+    goals = []
+
+    def straight_there(self, a, b, back=None):
+        goals.append(b)
+        yield ITERATION_UNITS
+        return [b]
+
+    monkeypatch.setattr(Clearance, "_routing", straight_there)
+    guide = Avoider(room, budget=math.inf)
+    goal = _finish(guide._planning(start, answer, DEEPER, 0.5, answer))[0]
+    assert room.off_stops(goal) and room.misses(goal, DEEPER)[0] <= 0.5
+    assert len(goals) == 1 and np.array_equal(goals[0], goal)
+    # With no way to it, the way to the solver's answer.
+    roomy = goal
+
+    def none_to_it(self, a, b, back=None):
+        goals.append(b)
+        yield ITERATION_UNITS
+        return None if np.array_equal(b, roomy) else [b]
+
+    monkeypatch.setattr(Clearance, "_routing", none_to_it)
+    goals.clear()
+    goal = _finish(guide._planning(start, answer, DEEPER, 0.5, answer))[0]
+    assert np.array_equal(goal, answer) and len(goals) == 2
+    # With no clear answer off the stops, the way to the solver's is searched for, as before.
+    monkeypatch.setattr(Clearance, "off_stops", lambda self, angles: False)
+    goals.clear()
+    goal = _finish(guide._planning(start, answer, DEEPER, 0.5, answer))[0]
+    assert np.array_equal(goal, answer) and len(goals) == 1
