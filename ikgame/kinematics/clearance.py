@@ -124,7 +124,7 @@ RANDOM_SEED: Final = 7193
 """Seed of the generators of random seeds and route samples: the same inputs give the same
 answers."""
 
-STOP_ROOM: Final = 0.05
+STOP_ROOM: Final = 0.02
 """Share of a joint's range (within a turn) a clear answer keeps off each limit to count as off
 its stops: an answer with a joint nearer a stop than that is taken only when no clear answer off
 them is found (a fold pressed against a stop under a shelf leaves the chain no short way on)."""
@@ -582,7 +582,7 @@ class Clearance:
         >>> arm = Skeleton.chain([100.0, 100.0], limits=[None, (-1.0, 1.0)])
         >>> post = Obstacles.from_arrays(np.empty((0, 5)), np.array([[0.0, 250.0, 10.0]]))
         >>> room = Clearance(arm, np.full(2, 5.0), post)
-        >>> room.off_stops(np.array([3.1, -0.85])), room.off_stops(np.array([0.0, -0.95]))
+        >>> room.off_stops(np.array([3.1, -0.85])), room.off_stops(np.array([0.0, -0.97]))
         (True, False)
         """
         sk = self.skeleton
