@@ -299,11 +299,22 @@ class Servo:
             # Gravity and the wanted acceleration alone, and pymunk's pivots find the rest.
             drive = fit_drive(hold, push, wanted_acceleration, self.max_torque, head, weak, easing)
         self._remember(drive.saturated.tolist(), drive.loads.torques.tolist(), error.tolist())
+        budgets = np.maximum(self.max_torque - np.abs(drive.loads.torques), 0.0)
+        if not self._sections:
+            carried = _overrun(
+                self.inertia.parent_list,
+                drive.saturated.tolist(),
+                drive.loads.torques.tolist(),
+                velocities.tolist(),
+                error.tolist(),
+                wanted_acceleration.tolist(),
+            )
+            budgets = np.where(carried, 0.0, budgets)
         return ServoCommand(
             rates=velocities + drive.accelerations * dt,
             torques=drive.loads.torques,
             forces=drive.loads.forces,
-            budgets=np.maximum(self.max_torque - np.abs(drive.loads.torques), 0.0),
+            budgets=budgets,
         )
 
     def _command_floats(
@@ -428,16 +439,18 @@ class Servo:
             )
         torques = loads[0]
         self._remember(saturated, torques, errors)
+        budgets = [
+            0.0 if 0.0 > (left := lim - abs(t)) else left
+            for lim, t in zip(limits, torques, strict=True)
+        ]
+        if not self._sections:
+            carried = _overrun(tree.parents, saturated, torques, now, errors, accelerations)
+            budgets = [0.0 if c else b for c, b in zip(carried, budgets, strict=True)]
         return ServoCommand(
             rates=np.array([v + a * dt for v, a in zip(now, reached, strict=True)]),
             torques=np.array(torques),
             forces=np.array((loads[1], loads[2])).T,
-            budgets=np.array(
-                [
-                    0.0 if 0.0 > (left := lim - abs(t)) else left
-                    for lim, t in zip(limits, torques, strict=True)
-                ]
-            ),
+            budgets=np.array(budgets),
         )
 
 
@@ -483,6 +496,28 @@ def _weak(stalled: list[bool], held: list[float], limits: list[float]) -> list[b
     :func:`~ikgame.control.dynamics.give_way`): those that gave their goal up, and those whose
     static load (``held``, gravity at the pose) is past their limit."""
     return [s or not abs(h) <= lim for s, h, lim in zip(stalled, held, limits, strict=True)]
+
+
+def _overrun(
+    parents: list[int],
+    saturated: list[bool],
+    torques: list[float],
+    velocities: list[float],
+    errors: list[float],
+    wanted: list[float],
+) -> list[bool]:
+    """Joints beyond one carried on toward its goal by the others' braking: its torque is at
+    its limit on the side it turns (``torques`` and ``velocities`` agree) while it asks to slow
+    down (``wanted`` acceleration against its motion) and still heads for its goal (the sign of
+    its angle error). Their motors should correct their rates with no torque of their own."""
+    carried = [
+        at and t * v > 0.0 and v * e > 0.0 and a * v < 0.0
+        for at, t, v, e, a in zip(saturated, torques, velocities, errors, wanted, strict=True)
+    ]
+    beyond = [False] * len(parents)
+    for j, p in enumerate(parents):
+        beyond[j] = p >= 0 and (carried[p] or beyond[p])
+    return beyond
 
 
 def _sign(value: float) -> float:
