@@ -265,7 +265,10 @@ class Servo:
         target = target * _fit(np.abs(spin), self._room(spin, hold.torques, 1.0 - BRAKE_SHARE))
         # Approach that velocity no faster than each joint's spare torque allows: a servo that
         # asked for the whole change in one tick would saturate every motor after any knock.
-        wanted = np.clip(target, velocities - down * dt, velocities + up * dt)
+        slowest, fastest = velocities - down * dt, velocities + up * dt
+        wanted = np.clip(target, slowest, fastest)
+        # Joints asking for all the braking they have: a velocity this tick cannot bring them to.
+        hard = np.where(velocities > 0.0, target < slowest, (velocities < 0.0) & (target > fastest))
         wanted_acceleration = (wanted - velocities) / dt
         push = pose.loads(alpha=along(wanted_acceleration))
         joints = np.arange(len(error))
@@ -307,7 +310,8 @@ class Servo:
                 drive.loads.torques.tolist(),
                 velocities.tolist(),
                 error.tolist(),
-                wanted_acceleration.tolist(),
+                hard.tolist(),
+                self.gain,
             )
             budgets = np.where(carried, 0.0, budgets)
         return ServoCommand(
@@ -410,9 +414,10 @@ class Servo:
         if not quiet.spins(target_total):
             spin = pose.loads(omega=tree.along(target))[0]
             factor = _fit_floats(spin, held, limits, 1.0 - BRAKE_SHARE)
-        accelerations = []
+        accelerations, hard = [], []
         for t, v, d, u in zip(target, now, down, up, strict=True):
             wanted, slowest, fastest = t * factor, v - d * dt, v + u * dt
+            hard.append(slowest > wanted if v > 0.0 else v < 0.0 and fastest < wanted)
             wanted = slowest if slowest > wanted else wanted
             wanted = fastest if fastest < wanted else wanted
             accelerations.append((wanted - v) / dt)
@@ -444,7 +449,7 @@ class Servo:
             for lim, t in zip(limits, torques, strict=True)
         ]
         if not self._sections:
-            carried = _overrun(tree.parents, saturated, torques, now, errors, accelerations)
+            carried = _overrun(tree.parents, saturated, torques, now, errors, hard, gain)
             budgets = [0.0 if c else b for c, b in zip(carried, budgets, strict=True)]
         return ServoCommand(
             rates=np.array([v + a * dt for v, a in zip(now, reached, strict=True)]),
@@ -504,15 +509,16 @@ def _overrun(
     torques: list[float],
     velocities: list[float],
     errors: list[float],
-    wanted: list[float],
+    hard: list[bool],
+    gain: float,
 ) -> list[bool]:
-    """Joints beyond one carried on toward its goal by the others' braking: its torque is at
-    its limit on the side it turns (``torques`` and ``velocities`` agree) while it asks to slow
-    down (``wanted`` acceleration against its motion) and still heads for its goal (the sign of
-    its angle error). Their motors should correct their rates with no torque of their own."""
+    """Joints beyond one that the others' braking carries on toward its goal: its torque is
+    at its limit on the side it turns (``torques`` and ``velocities`` agree) while it heads
+    for its goal (the sign of its angle ``errors``) and asks to brake with all it has
+    (``hard``). Their motors should correct their rates with no torque of their own."""
     carried = [
-        at and t * v > 0.0 and v * e > 0.0 and a * v < 0.0
-        for at, t, v, e, a in zip(saturated, torques, velocities, errors, wanted, strict=True)
+        at and t * v > 0.0 and v * e > 0.0 and h and abs(v) > gain * abs(e)
+        for at, t, v, e, h in zip(saturated, torques, velocities, errors, hard, strict=True)
     ]
     beyond = [False] * len(parents)
     for j, p in enumerate(parents):
