@@ -311,6 +311,9 @@ class Servo:
                 velocities.tolist(),
                 error.tolist(),
                 hard.tolist(),
+                push.torques.tolist(),
+                hold.torques.tolist(),
+                self._limits,
                 self.gain,
             )
             budgets = np.where(carried, 0.0, budgets)
@@ -449,7 +452,9 @@ class Servo:
             for lim, t in zip(limits, torques, strict=True)
         ]
         if not self._sections:
-            carried = _overrun(tree.parents, saturated, torques, now, errors, hard, gain)
+            carried = _overrun(
+                tree.parents, saturated, torques, now, errors, hard, push[0], held, limits, gain
+            )
             budgets = [0.0 if c else b for c, b in zip(carried, budgets, strict=True)]
         return ServoCommand(
             rates=np.array([v + a * dt for v, a in zip(now, reached, strict=True)]),
@@ -510,15 +515,39 @@ def _overrun(
     velocities: list[float],
     errors: list[float],
     hard: list[bool],
+    pushed: list[float],
+    held: list[float],
+    limits: list[float],
     gain: float,
 ) -> list[bool]:
-    """Joints beyond one that the others' braking carries on toward its goal: its torque is
-    at its limit on the side it turns (``torques`` and ``velocities`` agree) while it heads
-    for its goal (the sign of its angle ``errors``) and asks to brake with all it has
-    (``hard``). Their motors should correct their rates with no torque of their own."""
+    """Joints whose motors should add no torque to correct their rates: those beyond a joint
+    the others' braking carries on past its goal.
+
+    Such a joint heads for its goal (the sign of its angle ``errors``) faster than the gain
+    would bring it in, asks to brake with all it has (``hard``), yet the motion wanted of the
+    whole chain (``pushed``, its own braking included) takes more than its torque limit the
+    way it turns, and its torque (``torques``) is at that limit there: the far links'
+    braking comes onto it and its motor cannot take it up. The motors beyond, correcting their
+    rates with their spare torque, push it on further. Only where gravity (``held``, at the
+    pose) takes less than half the limit of it and of every joint beyond: a motor holding
+    more needs its correction against the sag. Torques are in mass px^2/s^2, rates rad/s,
+    angles radians; ``gain`` is the servo's, /s.
+    """
+    light = [abs(h) < STALL_LOAD * lim for h, lim in zip(held, limits, strict=True)]
+    for j in range(len(parents) - 1, -1, -1):
+        if parents[j] >= 0 and not light[j]:
+            light[parents[j]] = False
     carried = [
-        at and t * v > 0.0 and v * e > 0.0 and h and abs(v) > gain * abs(e)
-        for at, t, v, e, h in zip(saturated, torques, velocities, errors, hard, strict=True)
+        lit
+        and at
+        and t * v > 0.0
+        and p * v > lim * abs(v)
+        and v * e > 0.0
+        and h
+        and abs(v) > gain * abs(e)
+        for lit, at, t, p, lim, v, e, h in zip(
+            light, saturated, torques, pushed, limits, velocities, errors, hard, strict=True
+        )
     ]
     beyond = [False] * len(parents)
     for j, p in enumerate(parents):
