@@ -21,7 +21,9 @@ This servo instead:
    gives way at its limit where the motion needs more of it, rather than set the one factor
    every other joint's acceleration is scaled by (:func:`~ikgame.control.dynamics.give_way`);
    the joints nearer the base whose accelerations ease the joint that sets that factor keep
-   them whole (:func:`~ikgame.control.dynamics.ease`).
+   them whole (:func:`~ikgame.control.dynamics.ease`). The motors beyond a joint that the
+   far links' braking carries on past its goal get no torque to correct their rates with
+   (:func:`_overrun`): correcting, they pushed it on further.
 
 Units: radians, rad/s, px, s, torques mass px^2/s^2.
 """

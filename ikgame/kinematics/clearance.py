@@ -32,7 +32,8 @@ width). A chain aims its end effector at a point; a tree aims a
   along the poses its polish steps through drawing the end from each tree's root toward a point
   out in the open (the retreat), and a tree's piece whose links' gaps at its two ends outweigh how
   far the links can sweep between them is clear without sampling. A route that takes the
-  targeted ends past the target and back is cut where they come nearest it. An
+  targeted ends past the target and back is cut where they come nearest it (on its last
+  piece, which ends on the target, where they pass it before swinging out). An
   :class:`Avoider` remembers the last route of several pieces it took up: a chain still at its
   end for which the trees find no way is routed back along it (the way out of a narrow passage
   is the way in).
