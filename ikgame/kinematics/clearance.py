@@ -818,7 +818,8 @@ class Clearance:
         on its pieces before the last, when that is nearer than they are at the last via pose:
         the via poses before the cut, the cut, then a clear answer polished from the cut
         (within ``tolerance``) when the line to it is clear, else the goal when the line to it
-        is; the route as it was when neither is.
+        is; when neither is, or no piece before the last comes nearer, the route as
+        :meth:`_passing` leaves it.
 
         The search knows poses, not where they put the ends: a via pose can lie past the
         target, and a chain following the route takes its end past the target and back (10%

@@ -356,9 +356,9 @@ _FOLDED_RATES += [-1.4, -1.31, -1.05, -0.76, -0.58, -0.64, -0.81, -0.76, -0.5, -
 @pytest.mark.parametrize("floats", [True, False], ids=["floats", "numpy"])
 @pytest.mark.parametrize("toward", [True, False], ids=["toward-goal", "away-from-goal"])
 def test_motors_beyond_a_base_the_others_braking_carries_on_add_no_torque(floats, toward):
-    # Braking the far joints takes a torque on the base 7 times its limit the way it turns:
-    # at its limit, and asking to brake with all it has, the base is carried on toward its
-    # goal. The far motors, correcting their rates with their spare torque, pushed it on
+    # The motion wanted of the chain, the far joints' braking with the base's own, takes 6
+    # times the base's limit the way it turns: at its limit, and asking to brake with all it
+    # has, the base is carried on toward its goal. The far motors, correcting their rates with their spare torque, pushed it on
     # further: it sped up to 2.8 rad/s and stopped 2.1 deg past its goal (the tip 10% of the
     # approach past the target). With its goal behind it the base is turning back, which is
     # no overrun: the far motors keep their budgets.
