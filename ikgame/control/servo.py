@@ -21,7 +21,9 @@ This servo instead:
    gives way at its limit where the motion needs more of it, rather than set the one factor
    every other joint's acceleration is scaled by (:func:`~ikgame.control.dynamics.give_way`);
    the joints nearer the base whose accelerations ease the joint that sets that factor keep
-   them whole (:func:`~ikgame.control.dynamics.ease`).
+   them whole (:func:`~ikgame.control.dynamics.ease`). The motors beyond a joint that the
+   far links' braking carries on past its goal get no torque to correct their rates with
+   (:func:`_overrun`): correcting, they pushed it on further.
 
 Units: radians, rad/s, px, s, torques mass px^2/s^2.
 """
@@ -265,7 +267,10 @@ class Servo:
         target = target * _fit(np.abs(spin), self._room(spin, hold.torques, 1.0 - BRAKE_SHARE))
         # Approach that velocity no faster than each joint's spare torque allows: a servo that
         # asked for the whole change in one tick would saturate every motor after any knock.
-        wanted = np.clip(target, velocities - down * dt, velocities + up * dt)
+        slowest, fastest = velocities - down * dt, velocities + up * dt
+        wanted = np.clip(target, slowest, fastest)
+        # Joints asking for all the braking they have: a velocity this tick cannot bring them to.
+        hard = np.where(velocities > 0.0, target < slowest, (velocities < 0.0) & (target > fastest))
         wanted_acceleration = (wanted - velocities) / dt
         push = pose.loads(alpha=along(wanted_acceleration))
         joints = np.arange(len(error))
@@ -299,11 +304,26 @@ class Servo:
             # Gravity and the wanted acceleration alone, and pymunk's pivots find the rest.
             drive = fit_drive(hold, push, wanted_acceleration, self.max_torque, head, weak, easing)
         self._remember(drive.saturated.tolist(), drive.loads.torques.tolist(), error.tolist())
+        budgets = np.maximum(self.max_torque - np.abs(drive.loads.torques), 0.0)
+        if not self._sections:
+            carried = _overrun(
+                self.inertia.parent_list,
+                drive.saturated.tolist(),
+                drive.loads.torques.tolist(),
+                velocities.tolist(),
+                error.tolist(),
+                hard.tolist(),
+                push.torques.tolist(),
+                hold.torques.tolist(),
+                self._limits,
+                self.gain,
+            )
+            budgets = np.where(carried, 0.0, budgets)
         return ServoCommand(
             rates=velocities + drive.accelerations * dt,
             torques=drive.loads.torques,
             forces=drive.loads.forces,
-            budgets=np.maximum(self.max_torque - np.abs(drive.loads.torques), 0.0),
+            budgets=budgets,
         )
 
     def _command_floats(
@@ -399,9 +419,10 @@ class Servo:
         if not quiet.spins(target_total):
             spin = pose.loads(omega=tree.along(target))[0]
             factor = _fit_floats(spin, held, limits, 1.0 - BRAKE_SHARE)
-        accelerations = []
+        accelerations, hard = [], []
         for t, v, d, u in zip(target, now, down, up, strict=True):
             wanted, slowest, fastest = t * factor, v - d * dt, v + u * dt
+            hard.append(slowest > wanted if v > 0.0 else v < 0.0 and fastest < wanted)
             wanted = slowest if slowest > wanted else wanted
             wanted = fastest if fastest < wanted else wanted
             accelerations.append((wanted - v) / dt)
@@ -428,16 +449,20 @@ class Servo:
             )
         torques = loads[0]
         self._remember(saturated, torques, errors)
+        budgets = [
+            0.0 if 0.0 > (left := lim - abs(t)) else left
+            for lim, t in zip(limits, torques, strict=True)
+        ]
+        if not self._sections:
+            carried = _overrun(
+                tree.parents, saturated, torques, now, errors, hard, push[0], held, limits, gain
+            )
+            budgets = [0.0 if c else b for c, b in zip(carried, budgets, strict=True)]
         return ServoCommand(
             rates=np.array([v + a * dt for v, a in zip(now, reached, strict=True)]),
             torques=np.array(torques),
             forces=np.array((loads[1], loads[2])).T,
-            budgets=np.array(
-                [
-                    0.0 if 0.0 > (left := lim - abs(t)) else left
-                    for lim, t in zip(limits, torques, strict=True)
-                ]
-            ),
+            budgets=np.array(budgets),
         )
 
 
@@ -483,6 +508,53 @@ def _weak(stalled: list[bool], held: list[float], limits: list[float]) -> list[b
     :func:`~ikgame.control.dynamics.give_way`): those that gave their goal up, and those whose
     static load (``held``, gravity at the pose) is past their limit."""
     return [s or not abs(h) <= lim for s, h, lim in zip(stalled, held, limits, strict=True)]
+
+
+def _overrun(
+    parents: list[int],
+    saturated: list[bool],
+    torques: list[float],
+    velocities: list[float],
+    errors: list[float],
+    hard: list[bool],
+    pushed: list[float],
+    held: list[float],
+    limits: list[float],
+    gain: float,
+) -> list[bool]:
+    """Joints whose motors should add no torque to correct their rates: those beyond a joint
+    the others' braking carries on past its goal.
+
+    Such a joint heads for its goal (the sign of its angle ``errors``) faster than the gain
+    would bring it in, asks to brake with all it has (``hard``), yet the motion wanted of the
+    whole chain (``pushed``, its own braking included) takes more than its torque limit the
+    way it turns, and its torque (``torques``) is at that limit there: the far links'
+    braking comes onto it and its motor cannot take it up. The motors beyond, correcting their
+    rates with their spare torque, push it on further. Only where gravity (``held``, at the
+    pose) takes less than half the limit of it and of every joint beyond: a motor holding
+    more needs its correction against the sag. Torques are in mass px^2/s^2, rates rad/s,
+    angles radians; ``gain`` is the servo's, /s.
+    """
+    light = [abs(h) < STALL_LOAD * lim for h, lim in zip(held, limits, strict=True)]
+    for j in range(len(parents) - 1, -1, -1):
+        if parents[j] >= 0 and not light[j]:
+            light[parents[j]] = False
+    carried = [
+        lit
+        and at
+        and t * v > 0.0
+        and p * v > lim * abs(v)
+        and v * e > 0.0
+        and h
+        and abs(v) > gain * abs(e)
+        for lit, at, t, p, lim, v, e, h in zip(
+            light, saturated, torques, pushed, limits, velocities, errors, hard, strict=True
+        )
+    ]
+    beyond = [False] * len(parents)
+    for j, p in enumerate(parents):
+        beyond[j] = p >= 0 and (carried[p] or beyond[p])
+    return beyond
 
 
 def _sign(value: float) -> float:

@@ -32,7 +32,8 @@ width). A chain aims its end effector at a point; a tree aims a
   along the poses its polish steps through drawing the end from each tree's root toward a point
   out in the open (the retreat), and a tree's piece whose links' gaps at its two ends outweigh how
   far the links can sweep between them is clear without sampling. A route that takes the
-  targeted ends past the target and back is cut where they come nearest it. An
+  targeted ends past the target and back is cut where they come nearest it (on its last
+  piece, which ends on the target, where they pass it before swinging out). An
   :class:`Avoider` remembers the last route of several pieces it took up: a chain still at its
   end for which the trees find no way is routed back along it (the way out of a narrow passage
   is the way in).
@@ -855,7 +856,8 @@ class Clearance:
         on its pieces before the last, when that is nearer than they are at the last via pose:
         the via poses before the cut, the cut, then a clear answer polished from the cut
         (within ``tolerance``) when the line to it is clear, else the goal when the line to it
-        is; the route as it was when neither is.
+        is; when neither is, or no piece before the last comes nearer, the route as
+        :meth:`_passing` leaves it.
 
         The search knows poses, not where they put the ends: a via pose can lie past the
         target, and a chain following the route takes its end past the target and back (10%
@@ -872,7 +874,7 @@ class Clearance:
         misses = (scale**2 * ((points - ends[:, links]) ** 2).sum(axis=-1)).sum(axis=-1)
         nearest = int(np.argmin(misses))
         if misses[nearest] >= misses[-1]:
-            return way
+            return (yield from self._passing(way, target, tolerance))
         cut = samples[nearest]
         # The via poses the chain passes before the cut.
         passed = way[: int(np.searchsorted(np.cumsum([len(p) for p in pieces]), nearest, "right"))]
@@ -884,6 +886,36 @@ class Clearance:
         # near as it is.
         if (yield from self._checking(way[-1], cut)):
             return [*passed, cut, way[-1]]
+        return (yield from self._passing(way, target, tolerance))
+
+    def _passing(
+        self, way: list[np.ndarray], target: np.ndarray | TargetSet, tolerance: float
+    ) -> _Work[list[np.ndarray]]:
+        """A route ``way`` (at least two poses) whose last piece takes the targeted ends past
+        the target and then out more than twice as far from it as they passed (and farther
+        than ``tolerance``) before they come back to it at the goal, cut where they passed
+        nearest and ended by a clear answer polished from there (within ``tolerance``) when
+        the line to it is clear; the route as it was otherwise.
+
+        The goal is on the target, so the cut of :meth:`_trimming` (a piece before the last
+        nearer the target than its end) never finds such a pass. On
+        `35_twenty_links_under_shelf` the last piece in under the shelf took the end within
+        2.7 px of the target 60% of the way along, then 43 px past it and back."""
+        samples = self._samples(way[-2], way[-1])
+        yield CHECK_UNITS + len(samples) * self._pose_units
+        links, points, scale = self._aim(target)
+        _, ends = self._links(self.points(samples))
+        apart = np.sqrt((scale**2 * ((points - ends[:, links]) ** 2).sum(axis=-1)).sum(axis=-1))
+        # The farthest the ends swing out from the nearest they passed before.
+        passed = np.minimum.accumulate(apart)
+        out = int(np.argmax(apart - passed))
+        nearest = int(np.argmin(apart[: out + 1]))
+        if nearest == 0 or not apart[out] > max(2.0 * passed[out], tolerance):
+            return way
+        cut = samples[nearest]
+        near = yield from self._polishing(cut, target, POLISH_ITERATIONS, tolerance, True)
+        if near.status is SolveStatus.SUCCESS and (yield from self._checking(cut, near.angles)):
+            return [*way[:-1], cut, near.angles]
         return way
 
     def tip_path(self, start: np.ndarray, goal: np.ndarray) -> np.ndarray:

@@ -340,3 +340,38 @@ def test_a_goal_on_a_planned_way_keeps_the_motion_s_direction(floats, monkeypatc
     monkeypatch.setattr(_floats, "ease", lambda *args: None)
     assert steered.tolist() == rates().tolist()
     assert abs(eased[0] - velocities[0]) > 10 * abs(steered[0] - velocities[0])
+
+
+# Twenty 15 px links of 35_twenty_links_under_shelf, folded back under the shelf, 60 ms before
+# DLS's tip reached the third target: the base turns toward its goal, 3.7 deg off, at
+# 1.21 rad/s, and the joints beyond it swing on (joint angles in degrees, errors in degrees,
+# rates in rad/s, as measured).
+_FOLDED = [-97, -10, 10, 19, 21, 15, 3, -4, -14, -27, -37, -37, -18, 12, 49, 59, 72, 46, 25, 11]
+_FOLDED_ERRORS = [3.7, 3.3, 3.0, 2.7, 2.2, 1.7, 1.2, 0.7, 0.2, -0.3]
+_FOLDED_ERRORS += [-0.7, -0.8, -0.6, -0.2, 0.1, -0.1, -0.6, -0.9, -0.7, -0.4]
+_FOLDED_RATES = [1.21, 0.83, 0.74, 0.6, 0.37, 0.05, -0.3, -0.65, -1.0, -1.27]
+_FOLDED_RATES += [-1.4, -1.31, -1.05, -0.76, -0.58, -0.64, -0.81, -0.76, -0.5, -0.2]
+
+
+@pytest.mark.parametrize("floats", [True, False], ids=["floats", "numpy"])
+@pytest.mark.parametrize("toward", [True, False], ids=["toward-goal", "away-from-goal"])
+def test_motors_beyond_a_base_the_others_braking_carries_on_add_no_torque(floats, toward):
+    # The motion wanted of the chain, the far joints' braking with the base's own, takes 6
+    # times the base's limit the way it turns: at its limit, and asking to brake with all it
+    # has, the base is carried on toward its goal. The far motors, correcting their rates with their spare torque, pushed it on
+    # further: it sped up to 2.8 rad/s and stopped 2.1 deg past its goal (the tip 10% of the
+    # approach past the target). With its goal behind it the base is turning back, which is
+    # no overrun: the far motors keep their budgets.
+    link = {"length": 15.0, "mass": 0.3, "limits": [-120.0, 120.0], "max_torque": 4.0e6}
+    servo = Simulation(_level([{**link, "repeat": 20}], [{"wait": 1.0}]), record=False)
+    servo = servo.controller.servo
+    if not floats:
+        servo._floats = None  # the numpy path, as chains longer than FLOAT_LINKS take
+    world = np.radians(90.0 + np.cumsum(_FOLDED))
+    error = np.radians(_FOLDED_ERRORS) * (1.0 if toward else -1.0)
+    command = servo.command(error, world, np.array(_FOLDED_RATES), (0.0, -900.0), 1 / 240)
+    if toward:
+        assert command.torques[0] == pytest.approx(4.0e6)  # at its limit, the way it turns
+        assert command.budgets[1:].tolist() == [0.0] * 19
+    else:
+        assert command.budgets[1:].min() > 1.0e5

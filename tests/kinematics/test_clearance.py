@@ -584,6 +584,35 @@ def test_a_route_past_the_target_and_back_is_cut_where_the_end_passes_nearest():
     assert _finish(room._trimming(start, [goal, past], target, 0.5)) == [goal, past]
 
 
+def _reaching(target: np.ndarray, first: float) -> np.ndarray:
+    """The pose of three 100 px links whose first joint is at ``first`` (radians) and whose
+    other two reach ``target`` with their elbow bent the positive way."""
+    elbow = 100.0 * np.array([math.cos(UP + first), math.sin(UP + first)])
+    dx, dy = target - elbow
+    bend = math.acos((dx * dx + dy * dy - 2.0e4) / 2.0e4)
+    second = math.atan2(dy, dx) - math.atan2(math.sin(bend), 1.0 + math.cos(bend)) - UP - first
+    return np.array([first, second, bend])
+
+
+def test_a_route_s_last_piece_past_the_target_and_back_is_cut_where_the_end_passes():
+    arm = Skeleton.chain([100.0, 100.0, 100.0], base_angle=UP)
+    far = Obstacles.from_arrays(NO_SEGMENTS, np.array([[1000.0, 1000.0, 10.0]]))
+    room = Clearance(arm, np.full(3, 5.0), far)
+    target = np.array([0.0, 250.0])
+    passing, goal = _reaching(target, 0.5), _reaching(target, -0.5)
+    via = 2.0 * passing - goal  # the line from it to the goal runs through ``passing``
+    start = via + 0.3 * (via - passing)
+    # Between the two poses that reach the target the line bends the end 19 px off it.
+    assert room.misses((passing + goal) / 2.0, target)[0] > 15.0
+    way = _finish(room._trimming(start, [via, goal], target, 0.5))
+    assert len(way) == 3 and np.array_equal(way[0], via)
+    assert np.abs(way[1] - passing).max() < 0.02  # where the end passes the target
+    assert room.misses(way[2], target)[0] <= 0.5
+    assert room.path_clear(via, way[1]) and room.path_clear(way[1], way[2])
+    # A last piece that comes in without passing the target is left as it is.
+    assert _finish(room._trimming(start, [via, passing], target, 0.5)) == [via, passing]
+
+
 def test_route_is_none_when_the_limits_leave_no_way_round():
     arm = Skeleton.chain([100.0], base_angle=UP, limits=[(-1.0, 1.0)])
     post = Obstacles.from_arrays(NO_SEGMENTS, np.array([[0.0, 80.0, 10.0]]))
