@@ -60,6 +60,8 @@ _STATE: Final = (
 """What one batch read takes from every body: a row of x, y, angle, angular velocity."""
 _LOADS: Final = pymunk.batch.BodyFields.FORCE | pymunk.batch.BodyFields.TORQUE
 """What one batch write gives every body: a row of force x, y and torque."""
+_ARBITER_BODIES: Final = pymunk.batch.ArbiterFields.BODY_A_ID | pymunk.batch.ArbiterFields.BODY_B_ID
+"""What one batch read takes from every cached arbiter: the ids of its two bodies."""
 _SET_RATE: Final = _chipmunk.lib.cpSimpleMotorSetRate
 _SET_MAX_FORCE: Final = _chipmunk.lib.cpConstraintSetMaxForce
 _IMPULSE: Final = _chipmunk.lib.cpConstraintGetImpulse
@@ -222,6 +224,8 @@ class World:
             self._returns.reverse()
         self._motor_structs = [motor._constraint for motor in self.motors]
         self._return_structs = [motor._constraint for motor in self._returns]
+        self._links_by_id = {body.id: body for body in self.bodies}
+        self._arbiter_reads = pymunk.batch.Buffer()
 
         if collide:
             apart = _apart(self.skeleton)
@@ -472,11 +476,21 @@ class World:
 
     def touching(self) -> bool:
         """True when any link of the chain is in contact with an obstacle or a prop."""
-        for body in self.bodies:
-            contacts: list[object] = []
-            body.each_arbiter(contacts.append)
-            if contacts:
-                return True
+        # A body's contacts are the arbiters of the last step that involve it, and chipmunk
+        # keeps every one of those among the space's cached arbiters (with some of the steps
+        # before): one batch read of the cached arbiters' bodies leaves only the links named
+        # there to ask, where asking every link took a call into pymunk each.
+        reads = self._arbiter_reads
+        reads.clear()
+        pymunk.batch.get_space_arbiters(self.space, _ARBITER_BODIES, reads)
+        links = self._links_by_id
+        for body_id in dict.fromkeys(np.frombuffer(reads.int_buf(), dtype=np.uintp).tolist()):
+            body = links.get(body_id)
+            if body is not None:
+                contacts: list[object] = []
+                body.each_arbiter(contacts.append)
+                if contacts:
+                    return True
         return False
 
     def set_gravity(self, gravity: tuple[float, float]) -> None:
