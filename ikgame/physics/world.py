@@ -692,6 +692,13 @@ class _Stops:
         self.lower = [-math.inf if j is None else float(j.min) for j in limit_joints]
         self.upper = [math.inf if j is None else float(j.max) for j in limit_joints]
         self.max_speed: list[float] = np.asarray(max_speed, dtype=float).tolist()
+        # A long chain's joints are screened over arrays first (the same comparisons of the
+        # same floats): on most ticks none is knocked, and a loop over them all cost more.
+        self._screen = (
+            (np.array(self.lower), np.array(self.upper), np.array(self.max_speed))
+            if len(self.joints) > FLOAT_LINKS
+            else None
+        )
 
     def brace(self, angles: np.ndarray, velocities: np.ndarray, dt: float) -> list[int]:
         """Move the stops of the knocked joints that the next ``dt`` s step would leave heading
@@ -701,8 +708,16 @@ class _Stops:
         # free joint's bounds are infinite, never passed.
         a, v = angles.tolist(), velocities.tolist()
         lower, upper, speeds, twice = self.lower, self.upper, self.max_speed, 2.0 * dt
+        joints = self.joints
+        screen = self._screen
+        if screen is not None:
+            low_at, high_at, fastest = screen
+            ahead_at = angles + twice * velocities
+            knocked = ((ahead_at < low_at) | (ahead_at > high_at)) & (np.abs(velocities) > fastest)
+            # Free joints' bounds are infinite: never passed, as the loop below finds too.
+            joints = {i: joints[i] for i in np.flatnonzero(knocked).tolist() if i in joints}
         braced = []
-        for i, joint in self.joints.items():
+        for i, joint in joints.items():
             angle, rate = a[i], v[i]
             ahead = angle + twice * rate
             low = ahead < lower[i]
