@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Final
+from typing import TYPE_CHECKING, Final
 
 import numpy as np
 import pymunk
@@ -28,6 +28,9 @@ from pymunk import _chipmunk_cffi as _chipmunk
 
 from ikgame.kinematics import Skeleton
 from ikgame.level.model import BallProp, BoxProp, CircleObstacle, Level, SegmentObstacle
+
+if TYPE_CHECKING:
+    from ikgame.physics._motors import CompiledMotors
 
 __all__ = ["World", "build_skeleton"]
 
@@ -224,6 +227,16 @@ class World:
             self._returns.reverse()
         self._motor_structs = [motor._constraint for motor in self.motors]
         self._return_structs = [motor._constraint for motor in self._returns]
+        self._compiled: tuple[CompiledMotors, CompiledMotors] | None = None
+        """The motors and their return twins written and read in one compiled call each, for
+        a chain with the return sweep (see :mod:`ikgame.physics._motors`), where numba can."""
+        if self._returns:
+            from ikgame.physics._motors import compiled_motors
+
+            motors = compiled_motors(self._motor_structs)
+            returns = compiled_motors(self._return_structs)
+            if motors is not None and returns is not None:
+                self._compiled = (motors, returns)
         self._links_by_id = {body.id: body for body in self.bodies}
         self._arbiter_reads = pymunk.batch.Buffer()
 
@@ -252,7 +265,7 @@ class World:
         """(n,) moment of inertia of each link about its centre, mass px^2."""
         self._lengths = 2.0 * np.array(self._halves, dtype=float)
         self._halves_array = 0.5 * self._lengths
-        self._feed_forward = [0.0] * self.count
+        self._feed_forward: list[float] | np.ndarray = [0.0] * self.count
         self._reads = pymunk.batch.Buffer()
         self._rows: _Rows | None = None
         self._link_angles: np.ndarray | None = None
@@ -429,6 +442,16 @@ class World:
             pair += beyond_forces
             loads[rows.links, :2] = forces - beyond_forces
             loads[rows.links, 2] = torques - beyond_torques - (hx * pair[:, 1] - hy * pair[:, 0])
+        compiled = self._compiled
+        if compiled is not None:
+            self._feed_forward = np.array(torques, dtype=float)
+            pymunk.batch.set_space_bodies(self.space, _LOADS, rows.writes)
+            # The same calls as the loops below, in the same order, with the same floats.
+            motors, returns = compiled
+            shares = 0.5 * np.asarray(budgets, dtype=float)
+            returns.write(rates, shares)
+            motors.write(rates, shares)
+            return
         if feed_forward is None:
             feed_forward = np.asarray(torques, dtype=float).tolist()
         self._feed_forward = feed_forward
@@ -447,11 +470,15 @@ class World:
     def motor_torques(self) -> np.ndarray:
         """(n,) magnitude of the torque each joint applied during the last step: feed-forward
         plus its motor's correction (the motor's impulse / dt)."""
+        if self._compiled is not None:
+            return self._applied_compiled(*self._compiled)
         return np.array(self._applied())
 
     def torque_limited(self) -> np.ndarray:
         """(n,) bool: which joints were at their torque limit during the last step."""
         share = 1.0 - 1e-6
+        if self._compiled is not None:
+            return self._applied_compiled(*self._compiled) >= self.max_torque * share
         return np.array(
             [
                 torque >= limit * share
@@ -473,6 +500,10 @@ class World:
             abs(f + _IMPULSE(m) / dt)
             for f, m in zip(self._feed_forward, self._motor_structs, strict=True)
         ]
+
+    def _applied_compiled(self, motors: CompiledMotors, returns: CompiledMotors) -> np.ndarray:
+        """:meth:`_applied` of a chain with compiled motors: the same sums over arrays."""
+        return np.abs(self._feed_forward + (motors.impulses() + returns.impulses()) / self.last_dt)
 
     def touching(self) -> bool:
         """True when any link of the chain is in contact with an obstacle or a prop."""
