@@ -26,10 +26,15 @@ import numpy as np
 if TYPE_CHECKING:
     from ikgame.kinematics._floats import FloatChain
 
-__all__ = ["COMPILED_LINKS", "compiled_end", "compiled_pass"]
+__all__ = ["COMPILED_END_LINKS", "COMPILED_LINKS", "compiled_end", "compiled_pass"]
 
 COMPILED_LINKS: Final = 32
 """Chains of this many links or more run their CCD passes compiled, where numba is installed."""
+
+COMPILED_END_LINKS: Final = 101
+"""Chains of this many links or more find their end effector by compiled forward kinematics,
+with any solver: shorter ones check their error for less than numba's import and compiling
+cost a run whose solver does not compile its CCD pass."""
 
 Pass = Callable[[list[float], float, float, float], tuple[list[float], int]]
 """``(angles, tx, ty, arrival_dist_sqr) -> (new angles, status code)``, radians and px."""
@@ -93,7 +98,7 @@ def compiled_end(chain: FloatChain) -> End | None:
     >>> compiled_end(FloatChain(Skeleton.chain([10.0, 10.0]))) is None  # too short to pay
     True
     """
-    if len(chain.lengths) < COMPILED_LINKS or os.environ.get("IKGAME_COMPILED") == "0":
+    if len(chain.lengths) < COMPILED_END_LINKS or os.environ.get("IKGAME_COMPILED") == "0":
         return None
     kernel = _forward_kernel()
     if kernel is None:
