@@ -125,11 +125,15 @@ class ChainInertia:
         return self.beyond(self.moments)
 
 
+_accumulate: Final = np.add.accumulate
+
+
 class _Tree:
     """Sums along a tree's links, as numpy cumulative sums over its runs: maximal stretches of
     consecutive links each hanging from the one before. A chain is one run, so its sums are
     exactly ``np.cumsum`` and its reverse; a tree's are the same additions in the same order as a
-    link-by-link loop."""
+    link-by-link loop. The sums are ``np.add.accumulate``, which is what ``np.cumsum`` calls on
+    floats, without its dispatch (which cost more than the sums at 100 links)."""
 
     def __init__(self, parents: list[int] | None, count: int) -> None:
         serial = list(range(-1, count - 1))
@@ -147,25 +151,25 @@ class _Tree:
 
     def along(self, values: np.ndarray) -> np.ndarray:
         if self.chain:
-            return np.cumsum(values, axis=0)
+            return _accumulate(values, axis=0)
         out = np.empty_like(values)
         for start, stop, parent in self.runs:
             if parent < 0:
-                out[start:stop] = np.cumsum(values[start:stop], axis=0)
+                out[start:stop] = _accumulate(values[start:stop], axis=0)
             else:
                 # Start the run's sum from its parent's, as a link-by-link loop adds them.
                 first = values[start:stop].copy()
                 first[0] += out[parent]
-                out[start:stop] = np.cumsum(first, axis=0)
+                out[start:stop] = _accumulate(first, axis=0)
         return out
 
     def beyond(self, values: np.ndarray) -> np.ndarray:
         if self.chain:
-            return np.cumsum(values[::-1], axis=0)[::-1]
+            return _accumulate(values[::-1], axis=0)[::-1]
         own = values.copy()
         out = np.empty_like(values)
         for start, stop, parent in reversed(self.runs):
-            out[start:stop] = np.cumsum(own[start:stop][::-1], axis=0)[::-1]
+            out[start:stop] = _accumulate(own[start:stop][::-1], axis=0)[::-1]
             if parent >= 0:
                 own[parent] += out[start]
         return out
@@ -364,7 +368,7 @@ def fit_drive(
     wanted: np.ndarray,
     max_torque: np.ndarray,
     head: Callable[[int], JointLoads] | None = None,
-    weak: tuple[list[bool], Callable[[int], JointLoads]] | None = None,
+    weak: tuple[list[bool] | np.ndarray, Callable[[int], JointLoads]] | None = None,
     turning: Callable[[np.ndarray], JointLoads] | None = None,
 ) -> Drive:
     """:func:`plan_drive` from its parts: ``bias``, the loads of coasting (gravity and the
@@ -388,14 +392,16 @@ def fit_drive(
     full = bias + push
     if np.all(np.abs(full.torques) <= limit):
         return Drive(wanted, full, np.zeros(len(limit), dtype=bool))
-    if weak is not None:
+    # give_way's first test, over arrays (the same sums and comparisons): whether any weak joint
+    # is past its limit. On most ticks none is, and its lists cost more than the rest.
+    if weak is not None and np.any(np.asarray(weak[0]) & ~(np.abs(full.torques) <= limit)):
         mask, column = weak
         gave = give_way(
             _listed(bias),
             _listed(push),
             wanted.tolist(),
             limit.tolist(),
-            mask,
+            np.asarray(mask).tolist(),
             lambda k: _listed(column(k)),
         )
         if gave is not None:

@@ -115,18 +115,19 @@ class Servo:
         self.max_speed = np.asarray(max_speed, dtype=float)
         self.gain = float(gain)
         count = len(self.max_torque)
-        # Per joint, as lists: the float path (most chains) reads and writes them every tick.
-        self._stalled = [False] * count
+        # Per joint, as lists: the float path (most chains) reads and writes them every tick;
+        # the array path keeps arrays between its ticks instead.
+        self._stalled: list[bool] | np.ndarray = [False] * count
         # At its torque limit toward its goal on the last tick. A joint at its limit the other
         # way is being swung away from its goal by its own motor (its share of the whole
         # chain's motion), not held off by a load it cannot beat.
-        self._straining = [False] * count
+        self._straining: list[bool] | np.ndarray = [False] * count
         # Straining on the last tick or the one before: a joint that cannot hold its load can
         # alternate between its limit and just under it as the motor and the feed-forward take
         # turns, and is pushing all the same.
-        self._pushing = [False] * count
-        self._velocities = [0.0] * count
-        self._carried = [0.0] * count
+        self._pushing: list[bool] | np.ndarray = [False] * count
+        self._velocities: list[float] | np.ndarray = [0.0] * count
+        self._carried: list[float] | np.ndarray = [0.0] * count
         self._floats = FloatInertia(inertia) if inertia.count <= FLOAT_LINKS else None
         if self._floats is not None:
             self._quiet = _Quiet(self._floats, self.max_torque.tolist())
@@ -236,14 +237,14 @@ class Servo:
         # at its limit, it sags at a steady speed or even slows, and gets nowhere all the same.
         load = np.sign(error) * hold.torques
         speed_now = np.abs(velocities)
-        faster = speed_now > np.maximum(np.abs(np.array(self._velocities)), STALL_SPEED)
+        faster = speed_now > np.maximum(np.abs(np.asarray(self._velocities)), STALL_SPEED)
         sagging = (load > self.max_torque) & (speed_now > STALL_SPEED)
-        carried = np.array(self._pushing) & (velocities * error < 0.0) & (faster | sagging)
-        carried_for = np.where(carried, np.array(self._carried) + dt, 0.0)
+        carried = np.asarray(self._pushing) & (velocities * error < 0.0) & (faster | sagging)
+        carried_for = np.where(carried, np.asarray(self._carried) + dt, 0.0)
         loaded = load >= STALL_LOAD * self.max_torque
-        stalled = np.array(self._stalled) | ((carried_for >= STALL_TIME) & loaded)
-        self._carried, self._stalled = carried_for.tolist(), stalled.tolist()
-        self._velocities = velocities.tolist()
+        stalled = np.asarray(self._stalled) | ((carried_for >= STALL_TIME) & loaded)
+        self._carried, self._stalled = carried_for, stalled
+        self._velocities = np.array(velocities, dtype=float)
         size = np.where(stalled, 0.0, np.abs(error))
         speed = np.minimum(
             np.minimum(self.max_speed, self.gain * size), np.sqrt(2.0 * brake * size)
@@ -283,7 +284,8 @@ class Servo:
         def alone(k: int) -> JointLoads:
             return pose.loads(alpha=along((joints == k).astype(float)))
 
-        weak = (_weak(stalled.tolist(), hold.torques.tolist(), self._limits), alone)
+        # _weak over arrays: the same comparisons.
+        weak = (stalled | ~(np.abs(hold.torques) <= self.max_torque), alone)
 
         def turning(accelerations: np.ndarray) -> JointLoads:
             return pose.loads(alpha=along(accelerations))
@@ -303,7 +305,9 @@ class Servo:
             # swing's own loads, clipped, would fight the pivots and fling a long chain apart.
             # Gravity and the wanted acceleration alone, and pymunk's pivots find the rest.
             drive = fit_drive(hold, push, wanted_acceleration, self.max_torque, head, weak, easing)
-        self._remember(drive.saturated.tolist(), drive.loads.torques.tolist(), error.tolist())
+        # _remember over arrays: the same products and comparisons.
+        toward = drive.saturated & (drive.loads.torques * error > 0.0)
+        self._pushing, self._straining = toward | np.asarray(self._straining), toward
         budgets = np.maximum(self.max_torque - np.abs(drive.loads.torques), 0.0)
         if not self._sections:
             carried = _overrun(

@@ -26,13 +26,22 @@ import numpy as np
 if TYPE_CHECKING:
     from ikgame.kinematics._floats import FloatChain
 
-__all__ = ["COMPILED_LINKS", "compiled_pass"]
+__all__ = ["COMPILED_END_LINKS", "COMPILED_LINKS", "compiled_end", "compiled_pass"]
 
 COMPILED_LINKS: Final = 32
 """Chains of this many links or more run their CCD passes compiled, where numba is installed."""
 
+COMPILED_END_LINKS: Final = 101
+"""Chains of this many links or more find their end effector by compiled forward kinematics,
+with any solver: shorter ones check their error for less than numba's import and compiling
+cost a run whose solver does not compile its CCD pass."""
+
 Pass = Callable[[list[float], float, float, float], tuple[list[float], int]]
 """``(angles, tx, ty, arrival_dist_sqr) -> (new angles, status code)``, radians and px."""
+
+End = Callable[["FloatChain", list[float]], tuple[float, float]]
+"""``(chain, angles) -> (x, y)``: the end effector of ``chain`` (its base as it is now) at
+``angles``, radians and px."""
 
 
 def compiled_pass(chain: FloatChain) -> Pass | None:
@@ -77,6 +86,63 @@ def compiled_pass(chain: FloatChain) -> Pass | None:
         return new.tolist(), int(status)
 
     return run
+
+
+def compiled_end(chain: FloatChain) -> End | None:
+    """``chain``'s forward kinematics to its end effector compiled, or None: a short chain, no
+    numba, or turned off. The base is read from the chain given at each call (a chain copied
+    for a moved base shares its lengths).
+
+    >>> from ikgame.kinematics import Skeleton
+    >>> from ikgame.kinematics._floats import FloatChain
+    >>> compiled_end(FloatChain(Skeleton.chain([10.0, 10.0]))) is None  # too short to pay
+    True
+    """
+    if len(chain.lengths) < COMPILED_END_LINKS or os.environ.get("IKGAME_COMPILED") == "0":
+        return None
+    kernel = _forward_kernel()
+    if kernel is None:
+        return None
+    lengths = np.array(chain.lengths, dtype=float)
+    joint_x, joint_y = np.empty(len(lengths) + 1), np.empty(len(lengths) + 1)
+
+    def end(of: FloatChain, angles: list[float]) -> tuple[float, float]:
+        kernel(
+            lengths,
+            np.array(angles, dtype=float),
+            of.base_x,
+            of.base_y,
+            of.base_angle,
+            joint_x,
+            joint_y,
+        )
+        return float(joint_x[-1]), float(joint_y[-1])
+
+    return end
+
+
+@functools.cache
+def _forward_kernel() -> Callable[..., None] | None:
+    """:func:`ikgame.kinematics._floats.forward` compiled, or None without numba (or where
+    numba cannot compile it: the Python code then runs, with a warning)."""
+    try:
+        import numba
+    except ImportError:
+        return None
+    from ikgame.kinematics import _floats
+
+    try:
+        kernel = numba.njit(nogil=True)(_floats.forward)
+        # Compiled now, on a one-link chain (see _kernel).
+        kernel(np.ones(1), np.zeros(1), 0.0, 0.0, 0.0, np.zeros(2), np.zeros(2))
+    except Exception as exc:  # noqa: BLE001 - an optional speed-up must never stop a run
+        warnings.warn(
+            f"numba could not compile forward kinematics, which run in Python: {exc}",
+            RuntimeWarning,
+            stacklevel=2,
+        )
+        return None
+    return kernel
 
 
 @functools.cache

@@ -11,6 +11,7 @@ from collections.abc import MutableSequence, Sequence
 
 import numpy as np
 
+from ikgame.kinematics._compiled import compiled_end
 from ikgame.kinematics.skeleton import Skeleton, check_angles, check_point
 
 
@@ -93,6 +94,10 @@ class FloatChain:
         self.base_x = float(skeleton.base[0])
         self.base_y = float(skeleton.base[1])
         self.base_angle = skeleton.base_angle
+        # A long chain's end effector by compiled forward kinematics, where numba can: the
+        # same floats (see ikgame.kinematics._compiled), and on most ticks the solver's checks
+        # of a tracking chain's error are what a solve costs.
+        self._end = compiled_end(self)
 
     def clamp(self, angles: list[float]) -> list[float]:
         """:meth:`Skeleton.clamp` over lists: the same floats as ``np.clip`` against the limit
@@ -112,6 +117,10 @@ class FloatChain:
 
     def error_sqr(self, angles: list[float], tx: float, ty: float) -> float:
         """Squared distance from the end effector to the target by forward kinematics, px^2."""
+        end = self._end
+        if end is not None:
+            x, y = end(self, angles)
+            return (x - tx) ** 2 + (y - ty) ** 2
         xs, ys = self.joints(angles)
         return (xs[-1] - tx) ** 2 + (ys[-1] - ty) ** 2
 

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Final
+from typing import TYPE_CHECKING, Final
 
 import numpy as np
 import pymunk
@@ -28,6 +28,9 @@ from pymunk import _chipmunk_cffi as _chipmunk
 
 from ikgame.kinematics import Skeleton
 from ikgame.level.model import BallProp, BoxProp, CircleObstacle, Level, SegmentObstacle
+
+if TYPE_CHECKING:
+    from ikgame.physics._motors import CompiledMotors
 
 __all__ = ["World", "build_skeleton"]
 
@@ -60,6 +63,8 @@ _STATE: Final = (
 """What one batch read takes from every body: a row of x, y, angle, angular velocity."""
 _LOADS: Final = pymunk.batch.BodyFields.FORCE | pymunk.batch.BodyFields.TORQUE
 """What one batch write gives every body: a row of force x, y and torque."""
+_ARBITER_BODIES: Final = pymunk.batch.ArbiterFields.BODY_A_ID | pymunk.batch.ArbiterFields.BODY_B_ID
+"""What one batch read takes from every cached arbiter: the ids of its two bodies."""
 _SET_RATE: Final = _chipmunk.lib.cpSimpleMotorSetRate
 _SET_MAX_FORCE: Final = _chipmunk.lib.cpConstraintSetMaxForce
 _IMPULSE: Final = _chipmunk.lib.cpConstraintGetImpulse
@@ -222,6 +227,18 @@ class World:
             self._returns.reverse()
         self._motor_structs = [motor._constraint for motor in self.motors]
         self._return_structs = [motor._constraint for motor in self._returns]
+        self._compiled: tuple[CompiledMotors, CompiledMotors] | None = None
+        """The motors and their return twins written and read in one compiled call each, for
+        a chain with the return sweep (see :mod:`ikgame.physics._motors`), where numba can."""
+        if self._returns:
+            from ikgame.physics._motors import compiled_motors
+
+            motors = compiled_motors(self._motor_structs)
+            returns = compiled_motors(self._return_structs)
+            if motors is not None and returns is not None:
+                self._compiled = (motors, returns)
+        self._links_by_id = {body.id: body for body in self.bodies}
+        self._arbiter_reads = pymunk.batch.Buffer()
 
         if collide:
             apart = _apart(self.skeleton)
@@ -248,7 +265,7 @@ class World:
         """(n,) moment of inertia of each link about its centre, mass px^2."""
         self._lengths = 2.0 * np.array(self._halves, dtype=float)
         self._halves_array = 0.5 * self._lengths
-        self._feed_forward = [0.0] * self.count
+        self._feed_forward: list[float] | np.ndarray = [0.0] * self.count
         self._reads = pymunk.batch.Buffer()
         self._rows: _Rows | None = None
         self._link_angles: np.ndarray | None = None
@@ -425,6 +442,16 @@ class World:
             pair += beyond_forces
             loads[rows.links, :2] = forces - beyond_forces
             loads[rows.links, 2] = torques - beyond_torques - (hx * pair[:, 1] - hy * pair[:, 0])
+        compiled = self._compiled
+        if compiled is not None:
+            self._feed_forward = np.array(torques, dtype=float)
+            pymunk.batch.set_space_bodies(self.space, _LOADS, rows.writes)
+            # The same calls as the loops below, in the same order, with the same floats.
+            motors, returns = compiled
+            shares = 0.5 * np.asarray(budgets, dtype=float)
+            returns.write(rates, shares)
+            motors.write(rates, shares)
+            return
         if feed_forward is None:
             feed_forward = np.asarray(torques, dtype=float).tolist()
         self._feed_forward = feed_forward
@@ -443,11 +470,15 @@ class World:
     def motor_torques(self) -> np.ndarray:
         """(n,) magnitude of the torque each joint applied during the last step: feed-forward
         plus its motor's correction (the motor's impulse / dt)."""
+        if self._compiled is not None:
+            return self._applied_compiled(*self._compiled)
         return np.array(self._applied())
 
     def torque_limited(self) -> np.ndarray:
         """(n,) bool: which joints were at their torque limit during the last step."""
         share = 1.0 - 1e-6
+        if self._compiled is not None:
+            return self._applied_compiled(*self._compiled) >= self.max_torque * share
         return np.array(
             [
                 torque >= limit * share
@@ -470,13 +501,27 @@ class World:
             for f, m in zip(self._feed_forward, self._motor_structs, strict=True)
         ]
 
+    def _applied_compiled(self, motors: CompiledMotors, returns: CompiledMotors) -> np.ndarray:
+        """:meth:`_applied` of a chain with compiled motors: the same sums over arrays."""
+        return np.abs(self._feed_forward + (motors.impulses() + returns.impulses()) / self.last_dt)
+
     def touching(self) -> bool:
         """True when any link of the chain is in contact with an obstacle or a prop."""
-        for body in self.bodies:
-            contacts: list[object] = []
-            body.each_arbiter(contacts.append)
-            if contacts:
-                return True
+        # A body's contacts are the arbiters of the last step that involve it, and chipmunk
+        # keeps every one of those among the space's cached arbiters (with some of the steps
+        # before): one batch read of the cached arbiters' bodies leaves only the links named
+        # there to ask, where asking every link took a call into pymunk each.
+        reads = self._arbiter_reads
+        reads.clear()
+        pymunk.batch.get_space_arbiters(self.space, _ARBITER_BODIES, reads)
+        links = self._links_by_id
+        for body_id in dict.fromkeys(np.frombuffer(reads.int_buf(), dtype=np.uintp).tolist()):
+            body = links.get(body_id)
+            if body is not None:
+                contacts: list[object] = []
+                body.each_arbiter(contacts.append)
+                if contacts:
+                    return True
         return False
 
     def set_gravity(self, gravity: tuple[float, float]) -> None:
@@ -678,6 +723,13 @@ class _Stops:
         self.lower = [-math.inf if j is None else float(j.min) for j in limit_joints]
         self.upper = [math.inf if j is None else float(j.max) for j in limit_joints]
         self.max_speed: list[float] = np.asarray(max_speed, dtype=float).tolist()
+        # A long chain's joints are screened over arrays first (the same comparisons of the
+        # same floats): on most ticks none is knocked, and a loop over them all cost more.
+        self._screen = (
+            (np.array(self.lower), np.array(self.upper), np.array(self.max_speed))
+            if len(self.joints) > FLOAT_LINKS
+            else None
+        )
 
     def brace(self, angles: np.ndarray, velocities: np.ndarray, dt: float) -> list[int]:
         """Move the stops of the knocked joints that the next ``dt`` s step would leave heading
@@ -687,8 +739,16 @@ class _Stops:
         # free joint's bounds are infinite, never passed.
         a, v = angles.tolist(), velocities.tolist()
         lower, upper, speeds, twice = self.lower, self.upper, self.max_speed, 2.0 * dt
+        joints = self.joints
+        screen = self._screen
+        if screen is not None:
+            low_at, high_at, fastest = screen
+            ahead_at = angles + twice * velocities
+            knocked = ((ahead_at < low_at) | (ahead_at > high_at)) & (np.abs(velocities) > fastest)
+            # Free joints' bounds are infinite: never passed, as the loop below finds too.
+            joints = {i: joints[i] for i in np.flatnonzero(knocked).tolist() if i in joints}
         braced = []
-        for i, joint in self.joints.items():
+        for i, joint in joints.items():
             angle, rate = a[i], v[i]
             ahead = angle + twice * rate
             low = ahead < lower[i]

@@ -3,6 +3,7 @@ a run the same with numba or without it."""
 
 from __future__ import annotations
 
+import copy
 import math
 
 import numpy as np
@@ -86,10 +87,47 @@ def test_a_numba_that_cannot_compile_leaves_the_pass_in_python(
 
     monkeypatch.setattr(numba, "njit", broken)
     _compiled._kernel.cache_clear()
+    _compiled._forward_kernel.cache_clear()
     try:
         with pytest.warns(RuntimeWarning, match="runs in Python: no compiler here"):
             assert _compiled._kernel() is None
-        chain = FloatChain(_long_chain(np.random.default_rng(5), _compiled.COMPILED_LINKS))
+        with pytest.warns(RuntimeWarning, match="run in Python: no compiler here"):
+            chain = FloatChain(_long_chain(np.random.default_rng(5), _compiled.COMPILED_END_LINKS))
+        assert chain._end is None
         assert _compiled.compiled_pass(chain) is None
     finally:
         _compiled._kernel.cache_clear()
+        _compiled._forward_kernel.cache_clear()
+
+
+@pytest.mark.parametrize("links", [_compiled.COMPILED_END_LINKS, 200])
+def test_a_compiled_end_is_the_python_forward_kinematics_bit_for_bit(links: int) -> None:
+    rng = np.random.default_rng(links + 1)
+    for _ in range(20):
+        chain = FloatChain(_long_chain(rng, links))
+        assert chain._end is not None
+        angles = rng.uniform(-3.0, 3.0, links).tolist()
+        xs, ys = chain.joints(angles)
+        assert chain._end(chain, angles) == (xs[-1], ys[-1])
+        tx, ty = rng.uniform(-500.0, 500.0, 2).tolist()
+        assert chain.error_sqr(angles, tx, ty) == (xs[-1] - tx) ** 2 + (ys[-1] - ty) ** 2
+
+
+def test_a_compiled_end_follows_a_chain_copied_for_a_moved_base() -> None:
+    chain = FloatChain(_long_chain(np.random.default_rng(9), _compiled.COMPILED_END_LINKS))
+    moved = copy.copy(chain)
+    moved.base_x, moved.base_y, moved.base_angle = 40.0, -30.0, 0.5
+    angles = [0.1] * _compiled.COMPILED_END_LINKS
+    xs, ys = moved.joints(angles)
+    assert moved.error_sqr(angles, 0.0, 0.0) == xs[-1] ** 2 + ys[-1] ** 2
+    assert chain.error_sqr(angles, 0.0, 0.0) != moved.error_sqr(angles, 0.0, 0.0)
+
+
+def test_short_chains_and_a_turned_off_switch_keep_the_end_in_python(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    rng = np.random.default_rng(4)
+    assert FloatChain(_long_chain(rng, _compiled.COMPILED_END_LINKS - 1))._end is None
+    assert FloatChain(_long_chain(rng, _compiled.COMPILED_END_LINKS))._end is not None
+    monkeypatch.setenv("IKGAME_COMPILED", "0")
+    assert FloatChain(_long_chain(rng, _compiled.COMPILED_END_LINKS))._end is None

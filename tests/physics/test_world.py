@@ -1,15 +1,19 @@
 """The pymunk world: motor sign, joint reads, limits, collisions, divergence."""
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pymunk
 import pytest
 
 from ikgame.kinematics import forward_kinematics
+from ikgame.level.loader import load_level
 from ikgame.level.model import Level
-from ikgame.physics.world import SWEEP_LINKS, World, build_skeleton
+from ikgame.physics.world import FLOAT_LINKS, SWEEP_LINKS, World, _Stops, build_skeleton
 from ikgame.sim import Simulation
+
+LEVELS = Path(__file__).parents[2] / "levels"
 
 
 def _level(links, *, gravity=(0.0, 0.0), obstacles=(), angle=90.0, base=(0.0, 0.0)) -> Level:
@@ -187,3 +191,63 @@ def test_a_long_chain_s_two_motor_halves_give_the_whole_torque_limit_and_no_more
     world.step(1 / 240)
     assert world.torque_limited()[0]
     assert world.motor_torques()[0] == pytest.approx(5000.0, rel=1e-6)
+
+
+def test_touching_answers_as_asking_every_link_for_its_contacts():
+    # The cached arbiters it reads first outlive the contacts (a prop pushed away, a link that
+    # left the floor): on every tick it must answer what asking every link would.
+    sim = Simulation(load_level(LEVELS / "12_push_the_ball.toml"), record=False)
+    answers = []
+    for _ in range(1500):
+        sim.step()
+        world = sim.world
+        asked = False
+        for body in world.bodies:
+            contacts: list[object] = []
+            body.each_arbiter(contacts.append)
+            asked = asked or bool(contacts)
+        assert world.touching() is asked
+        answers.append(asked)
+    assert any(answers) and not all(answers)
+
+
+def test_touching_asks_no_link_while_no_contact_is_cached(monkeypatch):
+    # A long chain in open space: one batch read of the cached arbiters, not a call per link.
+    world = World(_level([{"length": 10.0, "repeat": 100}], gravity=(0.0, -900.0)))
+    for _ in range(5):
+        world.step(1 / 240)
+    asked = []
+    monkeypatch.setattr(pymunk.Body, "each_arbiter", lambda body, func: asked.append(body))
+    assert world.touching() is False
+    assert asked == []
+
+
+def test_a_long_chains_stops_are_braced_as_joint_by_joint():
+    # Screened over arrays first, the same joints braced at the same angles as the loop over
+    # every limited joint, knocked ones, free ones and NaN among them.
+    rng = np.random.default_rng(5)
+    count = 3 * FLOAT_LINKS
+    bodies = [pymunk.Body(1.0, 1.0) for _ in range(count + 1)]
+
+    def stops(screened):
+        limits = [
+            None if i % 4 == 0 else pymunk.RotaryLimitJoint(bodies[i], bodies[i + 1], -1.0, 1.2)
+            for i in range(count)
+        ]
+        made = _Stops(limits, np.full(count, 3.0))
+        if not screened:
+            made._screen = None
+        return made, limits
+
+    for _ in range(50):
+        angles = rng.uniform(-1.1, 1.3, count)
+        velocities = rng.uniform(-400.0, 400.0, count) * (rng.random(count) < 0.2)
+        velocities[rng.integers(count)] = math.nan
+        (screened, limits), (looped, reference) = stops(True), stops(False)
+        assert screened._screen is not None
+        braced = screened.brace(angles, velocities, 1 / 240)
+        assert braced == looped.brace(angles, velocities, 1 / 240)
+        assert braced
+        for joint, other in zip(limits, reference, strict=True):
+            if joint is not None:
+                assert (joint.min, joint.max) == (other.min, other.max)
