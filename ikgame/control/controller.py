@@ -64,6 +64,18 @@ KEPT_STRAIN: Final = 0.5
 answer, for a still target, is kept while the chain comes in to it (see
 :meth:`Controller._reuse`)."""
 
+TOGETHER_STRAIN: Final = 0.9
+"""Share of its motors' torque limits that holding still at a strained goal must stay within
+for the joints to be brought in together (see :meth:`Controller._strained_way`). Brought in
+together, the light far joints ride the near ones' swing: the last joint of
+`29_five_weak_links`, carried off by it on the way to a goal that asked 0.94, stalled 34 deg
+short and the arm rested 30 px off the target."""
+
+LINE_STEPS: Final = (0.125, 0.25, 0.375, 0.5, 0.625, 0.75, 0.875)
+"""Where on the straight line in joint space from the chain to a strained goal (as a share of
+the way) the strain of holding still is checked before the joints are brought in together (see
+:meth:`Controller._strained_way`)."""
+
 
 def joint_error(desired: np.ndarray, measured: np.ndarray, limited: np.ndarray) -> np.ndarray:
     """Signed angle error per joint, radians.
@@ -383,8 +395,35 @@ class Controller:
             dt,
             goal_rates,
             steered=steered,
+            together=not steered and self._strained_way(solution, error),
         )
         return Command(solution, drive.rates, drive)
+
+    def _strained_way(self, solution: Solution, error: np.ndarray) -> bool:
+        """True when the chain is far from a goal (some joint more than :data:`NEAR` off) that
+        holding still strains its motors (past :data:`KEPT_STRAIN` of some limit, but within
+        :data:`TOGETHER_STRAIN`), and every pose on the straight line in joint space to it is
+        one the motors can hold: the servo then brings every joint in together, along that
+        line.
+
+        Each joint alone, the light far joints get up to speed sooner and arrive first, and the
+        pose on the way, the far joints bent and the near ones not yet, can ask more of a weak
+        motor than the goal or any pose on the line does. Seven weakening links hanging
+        (`40_seven_weak_links_hanging`) went to such a pose on their way to a goal that asked
+        at most 0.76 of any motor: three joints past their limits, they stalled there and the
+        arm hung 65 px off the target. Where the line itself is past the motors (an arm lifted
+        out straight), the far joints folding in first shortens the arm the near ones lift,
+        and the joints are left to come in each at its own pace: brought in together, the five
+        weak links of `29_five_weak_links` stalled lifting their stretched arm.
+        """
+        strain = self.solver.strain
+        if strain is None or float(np.abs(error).max()) <= NEAR:
+            return False
+        goal = solution.angles
+        if not KEPT_STRAIN < strain(goal) <= TOGETHER_STRAIN:
+            return False
+        start = goal - error
+        return all(strain(start + step * error) <= 1.0 for step in LINE_STEPS)
 
     def _solve(self, measured: np.ndarray, target: np.ndarray | TargetSet) -> Solution:
         """The solver's answer from the ``measured`` pose, steered clear of obstacles; an

@@ -188,6 +188,7 @@ class Servo:
         goal_rates: np.ndarray | None = None,
         *,
         steered: bool = False,
+        together: bool = False,
     ) -> ServoCommand:
         """One tick's command from each joint's angle ``error`` (radians) and the measured pose.
 
@@ -199,11 +200,21 @@ class Servo:
         joint runs out of torque (one factor for all, none kept whole by
         :func:`~ikgame.control.dynamics.ease`), since only the lines of the way were checked
         clear. Eased off its line, twenty links following their way out from under a shelf
-        caught on it.
+        caught on it. ``together`` closes every joint's error in the same time, the longest any
+        joint needs at its own speed (see :func:`_together`): the chain keeps to the straight
+        line in joint space to its goal.
         """
         if self._floats is not None:
             return self._command_floats(
-                self._floats, error, world_angles, velocities, gravity, dt, goal_rates, steered
+                self._floats,
+                error,
+                world_angles,
+                velocities,
+                gravity,
+                dt,
+                goal_rates,
+                steered,
+                together,
             )
         along = self.inertia.along
         pose = Pose(self.inertia, world_angles)
@@ -250,6 +261,8 @@ class Servo:
             np.minimum(self.max_speed, self.gain * size), np.sqrt(2.0 * brake * size)
         )
         closing = np.sign(error) * speed
+        if together:
+            closing = np.array(_together(error.tolist(), closing.tolist()))
         # Each joint's profile brakes it alone; stopping them all at once also loads the joints
         # nearer the base with the others' deceleration. Stop together, by the time the first
         # of them must have stopped (at a constant deceleration), within the braking share:
@@ -340,6 +353,7 @@ class Servo:
         dt: float,
         goal_rates: np.ndarray | None,
         steered: bool,
+        together: bool,
     ) -> ServoCommand:
         """:meth:`command` joint by joint over floats: the same steps, the same numbers."""
         pose = tree.pose(world_angles)
@@ -404,6 +418,15 @@ class Servo:
                 stop = 2.0 * abs(e) / magnitude
                 stop_in = stop if stop < stop_in else stop_in
         self._carried, self._stalled, self._velocities = carried, stalled, now
+        if together:
+            closing = _together(errors, closing)
+            closing_total, stop_in = 0.0, math.inf
+            for e, c in zip(errors, closing, strict=True):
+                magnitude = abs(c)
+                closing_total += magnitude
+                if magnitude > 1e-9:
+                    stop = 2.0 * abs(e) / magnitude
+                    stop_in = stop if stop < stop_in else stop_in
         # The loads of braking and of spinning are evaluated only when a bound on them (see
         # _Quiet) leaves any joint short of room: otherwise their factor is 1, exactly.
         quiet = self._quiet
@@ -468,6 +491,31 @@ class Servo:
             forces=np.array((loads[1], loads[2])).T,
             budgets=np.array(budgets),
         )
+
+
+def _together(errors: list[float], closing: list[float]) -> list[float]:
+    """Each joint's closing velocity (rad/s) slowed so that every joint closes its error
+    (radians) in the same time: the longest any moving joint needs at its own velocity. A
+    joint that is not closing (stalled, or on its goal) keeps its velocity and does not count.
+
+    Each joint's own velocity is the most it may have (its speed limit, its gain, and what it
+    can brake from), so none goes faster. Near the goal every joint's velocity is its gain times
+    its error, one time for all, and nothing changes. Far from it the light joints at the end
+    of a chain get up to speed sooner than the heavy ones near the base, and each alone would
+    arrive first: the poses on the way, the outer joints bent and the inner ones not yet, can
+    ask more than a weak motor has, where the straight line to the goal does not.
+
+    >>> _together([1.0, 0.1, 0.0], [2.0, 1.0, 0.0])
+    [2.0, 0.2, 0.0]
+    """
+    longest = 0.0
+    for e, c in zip(errors, closing, strict=True):
+        if abs(c) > 1e-9:
+            time = abs(e) / abs(c)
+            longest = time if time > longest else longest
+    if longest == 0.0:
+        return closing
+    return [e / longest if abs(c) > 1e-9 else c for e, c in zip(errors, closing, strict=True)]
 
 
 class _Quiet:

@@ -148,9 +148,10 @@ def _random_links(rng, n, parents):
     )
 
 
+@pytest.mark.parametrize("together", [False, True], ids=["each", "together"])
 @pytest.mark.parametrize("sections", [False, True], ids=["one-factor", "sections"])
 @pytest.mark.parametrize("parents", [None, [-1, 0, 0, 2, -1, 4]], ids=["chain", "tree"])
-def test_the_float_servo_commands_what_the_numpy_servo_does(parents, sections):
+def test_the_float_servo_commands_what_the_numpy_servo_does(parents, sections, together):
     n = 6
     rng = np.random.default_rng(11)
     inertia = _random_links(rng, n, parents)
@@ -163,8 +164,12 @@ def test_the_float_servo_commands_what_the_numpy_servo_does(parents, sections):
         error = rng.normal(size=n) * (0.05 if tick % 3 else 1.0)
         angles, velocities = rng.uniform(-3, 3, n), rng.normal(size=n) * 2
         goal = None if tick % 2 else rng.normal(size=n)
-        one = fast.command(error, angles, velocities, (0.0, -900.0), 1 / 240, goal)
-        other = slow.command(error, angles, velocities, (0.0, -900.0), 1 / 240, goal)
+        one = fast.command(
+            error, angles, velocities, (0.0, -900.0), 1 / 240, goal, together=together
+        )
+        other = slow.command(
+            error, angles, velocities, (0.0, -900.0), 1 / 240, goal, together=together
+        )
         for field in ("rates", "torques", "forces", "budgets"):
             assert np.array_equal(getattr(one, field), getattr(other, field)), (tick, field)
         assert np.array_equal(fast.stalled, slow.stalled)
@@ -375,3 +380,21 @@ def test_motors_beyond_a_base_the_others_braking_carries_on_add_no_torque(floats
         assert command.budgets[1:].tolist() == [0.0] * 19
     else:
         assert command.budgets[1:].min() > 1.0e5
+
+
+@pytest.mark.parametrize("floats", [True, False], ids=["floats", "numpy"])
+def test_joints_brought_in_together_close_their_errors_in_the_same_time(floats):
+    # Three links at rest in zero gravity, far from their goal: each joint alone would close
+    # at its own speed limit (the last, light and fast, first); together each closes its error
+    # in the time the slowest needs, so the velocities asked for keep the errors' proportions.
+    arm = ChainInertia(np.full(3, 60.0), np.full(3, 0.5), np.full(3, 0.5 * 60.0**2 / 12))
+    servo = Servo(arm, max_torque=np.full(3, 1e9), max_speed=np.array([1.0, 2.0, 4.0]), gain=12.0)
+    if not floats:
+        servo._floats = None  # the numpy path, as chains longer than FLOAT_LINKS take
+    error = np.array([1.0, -1.5, 2.0])
+    for _ in range(240):
+        drive = servo.command(error, np.zeros(3), np.zeros(3), (0.0, 0.0), 1 / 240, together=True)
+        error = error - drive.rates / 240
+    # The base at its 1 rad/s, the others at its pace: their errors stay in proportion.
+    assert np.allclose(error / np.array([1.0, -1.5, 2.0]), error[0], rtol=1e-6)
+    assert 0.0 < error[0] < 0.1
