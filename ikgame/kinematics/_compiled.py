@@ -16,12 +16,13 @@ from __future__ import annotations
 import functools
 import math
 import os
-import warnings
 from collections.abc import Callable
 from types import ModuleType
 from typing import TYPE_CHECKING, Final
 
 import numpy as np
+
+from ikgame._numba import compiled
 
 if TYPE_CHECKING:
     from ikgame.kinematics._floats import FloatChain
@@ -123,39 +124,24 @@ def compiled_end(chain: FloatChain) -> End | None:
 
 @functools.cache
 def _forward_kernel() -> Callable[..., None] | None:
-    """:func:`ikgame.kinematics._floats.forward` compiled, or None without numba (or where
-    numba cannot compile it: the Python code then runs, with a warning)."""
-    try:
-        import numba
-    except ImportError:
-        return None
+    """:func:`ikgame.kinematics._floats.forward` compiled, or None (see :func:`ikgame._numba.compiled`)."""
     from ikgame.kinematics import _floats
 
-    try:
+    def build(numba: ModuleType) -> Callable[..., None]:
         kernel = numba.njit(nogil=True)(_floats.forward)
         # Compiled now, on a one-link chain (see _kernel).
         kernel(np.ones(1), np.zeros(1), 0.0, 0.0, 0.0, np.zeros(2), np.zeros(2))
-    except Exception as exc:  # noqa: BLE001 - an optional speed-up must never stop a run
-        warnings.warn(
-            f"numba could not compile forward kinematics, which run in Python: {exc}",
-            RuntimeWarning,
-            stacklevel=2,
-        )
-        return None
-    return kernel
+        return kernel
+
+    return compiled("forward kinematics", build)
 
 
 @functools.cache
 def _kernel() -> Callable[..., int] | None:
-    """:func:`ikgame.kinematics.ccd._iterate` compiled, or None without numba (or where numba
-    cannot compile it: the Python pass then runs, with a warning)."""
-    try:
-        import numba
-    except ImportError:
-        return None
+    """:func:`ikgame.kinematics.ccd._iterate` compiled, or None (see :func:`ikgame._numba.compiled`)."""
     from ikgame.kinematics import ccd
 
-    try:
+    def build(numba: ModuleType) -> Callable[..., int]:
         _teach(numba)
         kernel = numba.njit(nogil=True)(ccd._iterate)
         # Compiled now, on a one-link chain, so that a numba that cannot compile it is found
@@ -165,14 +151,9 @@ def _kernel() -> Callable[..., int] | None:
         kernel(
             one, -one, one, free, 0.0, 0.0, 0.0, np.zeros(1), 1.0, 0.0, 0.0, scratch, scratch.copy()
         )
-    except Exception as exc:  # noqa: BLE001 - an optional speed-up must never stop a run
-        warnings.warn(
-            f"numba could not compile the CCD pass, which runs in Python: {exc}",
-            RuntimeWarning,
-            stacklevel=2,
-        )
-        return None
-    return kernel
+        return kernel
+
+    return compiled("the CCD pass", build)
 
 
 @functools.cache

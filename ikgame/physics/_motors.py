@@ -18,12 +18,14 @@ from __future__ import annotations
 import ctypes
 import functools
 import os
-import warnings
 from collections.abc import Callable
+from types import ModuleType
 from typing import Any
 
 import numpy as np
 from pymunk import _chipmunk_cffi as _chipmunk
+
+from ikgame._numba import compiled
 
 __all__ = ["CompiledMotors", "compiled_motors"]
 
@@ -71,12 +73,7 @@ def _floats(values: np.ndarray, count: int) -> np.ndarray:
 
 @functools.cache
 def _kernels() -> tuple[Callable[..., None], Callable[..., None]] | None:
-    """The write and read loops compiled, or None without numba (or where numba cannot compile
-    them: the Python loops then run, with a warning)."""
-    try:
-        import numba
-    except ImportError:
-        return None
+    """The write and read loops compiled, or None (see :func:`ikgame._numba.compiled`)."""
     lib, ffi = _chipmunk.lib, _chipmunk.ffi
 
     def function(name: str, result: Any, *arguments: Any) -> Any:
@@ -85,7 +82,7 @@ def _kernels() -> tuple[Callable[..., None], Callable[..., None]] | None:
         address = int(ffi.cast("uintptr_t", ffi.addressof(lib, name)))
         return ctypes.CFUNCTYPE(result, ctypes.c_size_t, *arguments)(address)
 
-    try:
+    def build(numba: ModuleType) -> tuple[Callable[..., None], Callable[..., None]]:
         set_rate = function("cpSimpleMotorSetRate", None, ctypes.c_double)
         set_max_force = function("cpConstraintSetMaxForce", None, ctypes.c_double)
         impulse = function("cpConstraintGetImpulse", ctypes.c_double)
@@ -107,11 +104,6 @@ def _kernels() -> tuple[Callable[..., None], Callable[..., None]] | None:
         none = np.zeros(0, dtype=np.uintp)
         write(none, np.zeros(0), np.zeros(0))
         read(none, np.zeros(0))
-    except Exception as exc:  # noqa: BLE001 - an optional speed-up must never stop a run
-        warnings.warn(
-            f"numba could not compile the motor loops, which run in Python: {exc}",
-            RuntimeWarning,
-            stacklevel=2,
-        )
-        return None
-    return write, read
+        return write, read
+
+    return compiled("the motor loops", build)

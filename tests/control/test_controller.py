@@ -224,12 +224,7 @@ def test_an_arm_whose_motors_weaken_toward_the_tip_comes_to_rest_on_its_answer(s
     # a pose they hold with 0.9 of their torque: little is left for motion. Solved afresh from
     # the pose in motion, the answer bent the light far joints to make up for the slow near
     # ones, which could not carry that, and the arm sagged and came back (0.7 px and more).
-    from ikgame.level.loader import load_level
-    from ikgame.sim import Simulation
-
-    root = Path(__file__).resolve().parents[2]
-    level = load_level(root / "benchmarks" / "stress_levels" / "36_six_weak_links_hanging.toml")
-    sim = Simulation(level, solver=solver, record=False)
+    sim = _stress_simulation("36_six_weak_links_hanging", solver)
     tips = []
     for _ in range(round(2.15 / sim.dt)):
         sim.step()
@@ -248,12 +243,7 @@ def test_weakening_links_far_from_a_strained_goal_come_in_together_and_hold_it(s
     # first, and the pose on the way (far joints bent, near ones not yet) asked up to 1.33 of
     # the weak motors' torque: they stalled there, the arm hung 65 px off the target (DLS) or
     # swung about it (CCD).
-    from ikgame.level.loader import load_level
-    from ikgame.sim import Simulation
-
-    root = Path(__file__).resolve().parents[2]
-    level = load_level(root / "benchmarks" / "stress_levels" / "40_seven_weak_links_hanging.toml")
-    sim = Simulation(level, solver=solver, record=False)
+    sim = _stress_simulation("40_seven_weak_links_hanging", solver)
     tips = []
     while sim.script.step_index == 0:
         sim.step()
@@ -270,3 +260,13 @@ def test_ik_rate_must_be_positive_or_none():
     with pytest.raises(ValueError, match="ik_rate"):
         Controller(skeleton, "ccd", max_speed=np.ones(1), ik_rate=0.0)
     assert Controller(skeleton, "ccd", max_speed=np.ones(1), ik_rate=None).ik_rate is None
+
+
+def _stress_simulation(name: str, solver: str):
+    """A simulation of the stress level ``name`` (benchmarks/stress_levels/) with ``solver``."""
+    from ikgame.level.loader import load_level
+    from ikgame.sim import Simulation
+
+    root = Path(__file__).resolve().parents[2]
+    level = load_level(root / "benchmarks" / "stress_levels" / f"{name}.toml")
+    return Simulation(level, solver=solver, record=False)

@@ -91,7 +91,7 @@ def test_a_numba_that_cannot_compile_leaves_the_pass_in_python(
     try:
         with pytest.warns(RuntimeWarning, match="runs in Python: no compiler here"):
             assert _compiled._kernel() is None
-        with pytest.warns(RuntimeWarning, match="run in Python: no compiler here"):
+        with pytest.warns(RuntimeWarning, match="runs in Python: no compiler here"):
             chain = FloatChain(_long_chain(np.random.default_rng(5), _compiled.COMPILED_END_LINKS))
         assert chain._end is None
         assert _compiled.compiled_pass(chain) is None

@@ -89,7 +89,7 @@ def test_a_numba_that_cannot_compile_leaves_the_motors_in_python(
     monkeypatch.setattr(numba, "njit", broken)
     _motors._kernels.cache_clear()
     try:
-        with pytest.warns(RuntimeWarning, match="run in Python: no compiler here"):
+        with pytest.warns(RuntimeWarning, match="runs in Python: no compiler here"):
             assert _motors._kernels() is None
         assert World(_level(SWEEP_LINKS + 1))._compiled is None
     finally:
