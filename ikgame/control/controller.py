@@ -312,6 +312,9 @@ class Controller:
         if pull == self._gravity:
             return
         self._gravity = pull
+        if self._fresh is not None:
+            # What the kept answer asks of the motors was asked under the gravity before.
+            self._fresh.strain = None
         servo = self.servo
         if servo is None or not self.skeleton.is_chain or not any(pull):
             self.solver.strain = None
@@ -420,7 +423,10 @@ class Controller:
         if strain is None or float(np.abs(error).max()) <= NEAR:
             return False
         goal = solution.angles
-        if not KEPT_STRAIN < strain(goal) <= TOGETHER_STRAIN:
+        fresh = self._fresh
+        # The solver's own answer, kept: its strain was asked once (see _straining).
+        kept = fresh is not None and not fresh.carried and fresh.angles is goal
+        if not KEPT_STRAIN < (self._strain(fresh) if kept else strain(goal)) <= TOGETHER_STRAIN:
             return False
         start = goal - error
         return all(strain(start + step * error) <= 1.0 for step in LINE_STEPS)
@@ -498,10 +504,15 @@ class Controller:
     def _straining(self, fresh: _Fresh) -> bool:
         """True when holding the ``fresh`` answer still takes more than :data:`KEPT_STRAIN` of
         some motor's torque limit (see :attr:`RobustSolver.strain`)."""
+        return self._strain(fresh) > KEPT_STRAIN
+
+    def _strain(self, fresh: _Fresh) -> float:
+        """What holding the ``fresh`` answer still takes of the motors' torque limits (the
+        largest share), asked once per answer (see :attr:`RobustSolver.strain`)."""
         if fresh.strain is None:
             strain = self.solver.strain
             fresh.strain = 0.0 if strain is None else strain(fresh.angles)
-        return fresh.strain > KEPT_STRAIN
+        return fresh.strain
 
     def _coming_in(self, goal: np.ndarray, measured: np.ndarray, velocities: np.ndarray) -> bool:
         """True while no joint is carried away from ``goal`` (radians) and some joint still

@@ -364,7 +364,6 @@ class Servo:
         # Each step as in command, with numpy's maximum, minimum and sign written out (the same
         # floats: a sign times a speed is the speed, its negation, zero or NaN).
         up, down, closing, carried, stalled = [], [], [], [], []
-        stop_in, closing_total = math.inf, 0.0
         floor_share, brake_share, stall_speed = BRAKE_FLOOR, BRAKE_SHARE, STALL_SPEED
         stall_time, stall_load, sqrt = STALL_TIME, STALL_LOAD, math.sqrt
         for lim, e, v, i, h, top, pushing, before, was_carried, was_stalled in zip(
@@ -412,21 +411,18 @@ class Servo:
             speed = by_brake if by_brake < speed else speed
             c = speed if e > 0.0 else -speed if e < 0.0 else 0.0 * speed if e == 0.0 else e
             closing.append(c)
+        self._carried, self._stalled, self._velocities = carried, stalled, now
+        if together:
+            closing = _together(errors, closing)
+        # The sum of the closing speeds, and the time the first joint to stop needs to, at a
+        # constant deceleration.
+        stop_in, closing_total = math.inf, 0.0
+        for e, c in zip(errors, closing, strict=True):
             magnitude = abs(c)
             closing_total += magnitude
             if magnitude > 1e-9:
                 stop = 2.0 * abs(e) / magnitude
                 stop_in = stop if stop < stop_in else stop_in
-        self._carried, self._stalled, self._velocities = carried, stalled, now
-        if together:
-            closing = _together(errors, closing)
-            closing_total, stop_in = 0.0, math.inf
-            for e, c in zip(errors, closing, strict=True):
-                magnitude = abs(c)
-                closing_total += magnitude
-                if magnitude > 1e-9:
-                    stop = 2.0 * abs(e) / magnitude
-                    stop_in = stop if stop < stop_in else stop_in
         # The loads of braking and of spinning are evaluated only when a bound on them (see
         # _Quiet) leaves any joint short of room: otherwise their factor is 1, exactly.
         quiet = self._quiet

@@ -270,3 +270,16 @@ def _stress_simulation(name: str, solver: str):
     root = Path(__file__).resolve().parents[2]
     level = load_level(root / "benchmarks" / "stress_levels" / f"{name}.toml")
     return Simulation(level, solver=solver, record=False)
+
+
+def test_a_kept_answer_s_strain_is_asked_again_when_gravity_changes():
+    # What holding the kept answer takes of the motors was asked under the gravity before: a
+    # level that makes gravity four times stronger must not keep the lighter figure.
+    sim = _stress_simulation("40_seven_weak_links_hanging", "dls")
+    controller = sim.controller
+    while controller._fresh is None:
+        sim.step()
+    fresh = controller._fresh
+    before = controller._strain(fresh)
+    controller._know_strain((0.0, -4.0 * 1400.0))
+    assert controller._strain(fresh) == pytest.approx(4.0 * before, rel=0.2)
