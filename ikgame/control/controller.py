@@ -38,6 +38,7 @@ from ikgame.kinematics import (
 )
 from ikgame.kinematics.clearance import Avoider
 from ikgame.kinematics.jacobian import jacobian
+from ikgame.kinematics.recovery import holds_along
 
 __all__ = ["Command", "Controller", "joint_error"]
 
@@ -70,11 +71,6 @@ for the joints to be brought in together (see :meth:`Controller._strained_way`).
 together, the light far joints ride the near ones' swing: the last joint of
 `29_five_weak_links`, carried off by it on the way to a goal that asked 0.94, stalled 34 deg
 short and the arm rested 30 px off the target."""
-
-LINE_STEPS: Final = (0.125, 0.25, 0.375, 0.5, 0.625, 0.75, 0.875)
-"""Where on the straight line in joint space from the chain to a strained goal (as a share of
-the way) the strain of holding still is checked before the joints are brought in together (see
-:meth:`Controller._strained_way`)."""
 
 
 def joint_error(desired: np.ndarray, measured: np.ndarray, limited: np.ndarray) -> np.ndarray:
@@ -406,8 +402,8 @@ class Controller:
         """True when the chain is far from a goal (some joint more than :data:`NEAR` off) that
         holding still strains its motors (past :data:`KEPT_STRAIN` of some limit, but within
         :data:`TOGETHER_STRAIN`), and every pose on the straight line in joint space to it is
-        one the motors can hold: the servo then brings every joint in together, along that
-        line.
+        one the motors can hold (:func:`~ikgame.kinematics.recovery.holds_along`): the servo
+        then brings every joint in together, along that line.
 
         Each joint alone, the light far joints get up to speed sooner and arrive first, and the
         pose on the way, the far joints bent and the near ones not yet, can ask more of a weak
@@ -428,8 +424,7 @@ class Controller:
         kept = fresh is not None and not fresh.carried and fresh.angles is goal
         if not KEPT_STRAIN < (self._strain(fresh) if kept else strain(goal)) <= TOGETHER_STRAIN:
             return False
-        start = goal - error
-        return all(strain(start + step * error) <= 1.0 for step in LINE_STEPS)
+        return holds_along(strain, goal - error, error)
 
     def _solve(self, measured: np.ndarray, target: np.ndarray | TargetSet) -> Solution:
         """The solver's answer from the ``measured`` pose, steered clear of obstacles; an

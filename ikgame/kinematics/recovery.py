@@ -43,9 +43,12 @@ the caller knows: this package knows no dynamics), a plain answer, arrived or st
 that takes more than ``STRAINED`` of some motor's limit starts, once the target has held still
 for ``STILL_CALLS`` calls, the same restarts (with
 ``HOLD_SEEDS`` random poses, then the answer slid along the poses that keep the end on the
-target toward one the motors hold), in which only an arrival within ``HOLDS`` counts; the first is
-followed like a far seed's answer. Until one is found the plain answer serves, and once every
-seed has failed it serves for as long as the goal stays.
+target toward one the motors hold), in which only an arrival within ``HOLDS`` counts. The first
+one the chain can get to through poses the motors hold (every pose checked on the straight line
+in joint space from the chain's, :func:`holds_along`) is followed like a far seed's answer; the
+first that the motors hold only at rest is served while the search goes on, and followed once
+every seed has been tried. Until one is found the plain answer serves, and once every seed has
+failed it serves for as long as the goal stays.
 
 :meth:`RobustSolver.solve_targets` is the same for a tree and a
 :class:`~ikgame.kinematics.targets.TargetSet`, with the multi-target solvers: the cache, the
@@ -94,8 +97,10 @@ __all__ = [
     "STRAINED",
     "HOLDS",
     "HOLD_SEEDS",
+    "WAY_STEPS",
     "RELIEF_STEPS",
     "RELIEF_TURN",
+    "holds_along",
 ]
 
 RESTART_BUDGET: Final = 100
@@ -134,6 +139,10 @@ HOLD_SEEDS: Final = 32
 """Random poses tried for an answer the motors can hold, when the plain one arrives in a pose
 they cannot: such poses are a narrow share of those that arrive (a tenth, on an arm of four
 links whose motors weaken toward the tip)."""
+
+WAY_STEPS: Final = (0.125, 0.25, 0.375, 0.5, 0.625, 0.75, 0.875)
+"""Where on the straight line in joint space from a chain's pose to another (as a share of the
+way) :func:`holds_along` checks what holding still takes of the motors."""
 
 RELIEF_STEPS: Final = 40
 """Most steps of the slide from an answer the motors cannot hold toward one they can, the end
@@ -358,6 +367,7 @@ class RobustSolver:
                     ),
                 ),
                 lambda angles: strain(angles) <= HOLDS,
+                lambda angles: holds_along(strain, start, angles - start),
             )
         if plain.status is SolveStatus.SUCCESS:
             # Arriving from where an unfinished search left the chain is that search's answer.
@@ -579,20 +589,40 @@ class RobustSolver:
         tol: float,
         seeds: tuple[_Seeds, _Seeds],
         holds: Callable[[np.ndarray], bool],
+        way: Callable[[np.ndarray], bool],
     ) -> Solution:
         """After a plain solve that arrives in a pose the motors cannot hold: restarts from the
-        seeds of a stall, the first arrival they can hold (``holds``) wins and is followed. While the search
-        goes on the plain answer serves; once it has tried every seed in vain, the plain answer
-        serves for as long as the goal stays."""
+        seeds of a stall, in which only arrivals they can hold (``holds``) count. The first the
+        chain can get to through poses they hold (``way``) wins and is followed. The first they
+        hold only at rest is served while the search goes on, and followed once it has tried
+        every seed; with none, the plain answer serves meanwhile, and for as long as the goal
+        stays once every seed has failed.
+
+        An answer found so can lie far from the chain in joint space, and the way there matters
+        as much as the answer: on `40_seven_weak_links_hanging` FABRIK's first arrival for the
+        third target asked 0.93 of some motor, but the straight line to it up to 1.69, and the
+        joints, coming in each at its own pace, passed poses asking 1.35 (the last joint turned
+        218 deg, its reaction carrying the sixth back until it stalled); the arm rested
+        `blocked` 82 px off. Where no arrival has such a way (an arm lifted out straight), the
+        first is served at once all the same: the chain sets off toward it while the search
+        goes on."""
         search = self._search
         if search is None or search.accept is None or not search.aims_at(target, tol):
-            search = self._search = _Search(*seeds, target, tol, holds)
+            search = self._search = _Search(*seeds, target, tol, holds, way)
         search.far = True
         used = search.run(self._skeleton, target, tol, self.budget)
-        if search.best is not None and search.arrived:
-            error = _error(self._skeleton, search.best, target)
-            answer = Solution(search.best, SolveStatus.SUCCESS, plain.iterations + used, error)
+        iterations = plain.iterations + used
+        found = search.best if search.arrived else None
+        if found is None and search.exhausted:
+            found = search.fallback
+        if found is not None:
+            error = _error(self._skeleton, found, target)
+            answer = Solution(found, SolveStatus.SUCCESS, iterations, error)
             return self._keep(answer, goal, followed=True)
+        if search.fallback is not None:
+            # Not kept: the search goes on at the next call.
+            error = _error(self._skeleton, search.fallback, target)
+            return Solution(search.fallback, SolveStatus.SUCCESS, iterations, error)
         if search.exhausted:
             self._unheld = goal
             self._search = None
@@ -636,11 +666,17 @@ class _Search:
         target: np.ndarray | TargetSet,
         tolerance: float,
         accept: Callable[[np.ndarray], bool] | None = None,
+        prefer: Callable[[np.ndarray], bool] | None = None,
     ) -> None:
         self.target = target.copy() if isinstance(target, np.ndarray) else target
         self.tolerance = tolerance
         self.accept = accept
         """Whether an arrival counts (the motors can hold it, say); None: every one does."""
+        self.prefer = prefer
+        """Whether an arrival that counts ends the search (the chain gets there through poses
+        the motors hold, say); None: every one does."""
+        self.fallback: np.ndarray | None = None
+        """The first arrival that counts but does not end the search, if any."""
         self.far = False
         self.best: np.ndarray | None = None
         self.best_far = False
@@ -706,6 +742,14 @@ class _Search:
                     and not self.accept(sol.angles)
                 ):
                     break  # it arrives, but not in a pose that counts: the next seed
+                if (
+                    sol.status is SolveStatus.SUCCESS
+                    and self.prefer is not None
+                    and not self.prefer(sol.angles)
+                ):
+                    if self.fallback is None:
+                        self.fallback = sol.angles
+                    break  # it counts, but a better one may follow: the next seed
                 score = self.score(sol)
                 if score < self._best_score or sol.status is SolveStatus.SUCCESS:
                     self.best, self.best_far = sol.angles, far
@@ -756,6 +800,24 @@ def _near_seeds(
             yield here, (dls,)
         yield stalled, (dls,)
     yield _backed_off(skeleton, stalled), (dls,)
+
+
+def holds_along(strain: Callable[[np.ndarray], float], start: np.ndarray, way: np.ndarray) -> bool:
+    """Whether the motors can hold every pose checked (at ``WAY_STEPS``) on the straight line
+    in joint space from ``start`` to ``start + way`` (radians): ``strain`` (what holding a pose
+    still takes of them, as :attr:`RobustSolver.strain`) within ``STRAINED`` at each. Neither
+    end is checked.
+
+    A chain whose joints come in together keeps to that line; one whose joints come in each at
+    its own pace passes near it.
+
+    >>> strain = lambda angles: float(np.abs(angles).max())  # a stand-in
+    >>> holds_along(strain, np.zeros(2), np.array([0.5, 1.1]))
+    True
+    >>> holds_along(strain, np.zeros(2), np.array([0.5, 2.0]))
+    False
+    """
+    return all(strain(start + step * way) <= STRAINED for step in WAY_STEPS)
 
 
 def _far_held_seeds(

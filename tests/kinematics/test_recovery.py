@@ -22,7 +22,7 @@ from ikgame.kinematics import (
     TargetSet,
     forward_kinematics,
 )
-from ikgame.kinematics.recovery import HOLDS, RESTART_BUDGET, STILL_CALLS
+from ikgame.kinematics.recovery import HOLDS, RESTART_BUDGET, STILL_CALLS, holds_along
 
 PI = math.pi
 NAMES = sorted(SOLVERS)
@@ -613,15 +613,18 @@ def test_a_moving_target_starts_no_search_for_a_pose_the_motors_can_hold():
         pose = sol.angles
 
 
-def _hanging_strain(arm: Skeleton, limits: np.ndarray, mass: float, gravity: float):
-    """What holding a hanging chain of equal links still takes of its motors: each joint's
-    static load (the links beyond it, each its mass at its middle) over its torque limit."""
+def _hanging_strain(arm: Skeleton, limits: np.ndarray, mass, gravity: float):
+    """What holding a hanging chain still takes of its motors: each joint's static load (the
+    links beyond it, each its ``mass``, one for all or one per link, at its middle) over its
+    torque limit."""
+    masses = np.broadcast_to(np.asarray(mass, dtype=float), (arm.count,))
 
     def strain(angles: np.ndarray) -> float:
         points = forward_kinematics(arm, angles)[0]
         middles = (points[:-1] + points[1:]) / 2.0
         loads = [
-            mass * gravity * float(np.sum(middles[j:, 0] - points[j, 0])) for j in range(arm.count)
+            gravity * float(np.sum(masses[j:] * (middles[j:, 0] - points[j, 0])))
+            for j in range(arm.count)
         ]
         return float(np.max(np.abs(loads) / limits))
 
@@ -646,3 +649,47 @@ def test_an_answer_the_motors_cannot_hold_slides_to_one_they_can_that_ends_on_th
         sol = robust.solve(pose, target, max_iterations=10, tolerance=TOLERANCE)
     assert sol.status is SolveStatus.SUCCESS and sol.error <= TOLERANCE
     assert strain(sol.angles) <= HOLDS
+
+
+def test_an_answer_the_motors_can_hold_is_one_the_chain_gets_to_through_poses_they_hold():
+    # The seven weakening links of 40_seven_weak_links_hanging, on their way to the third
+    # target. FABRIK's first arrival the motors hold (0.93 of some torque limit) folds the
+    # last two links from -111 deg on the last joint: the straight line in joint space to it
+    # asks up to 1.69, and the arm, coming in each joint at its own pace, stalled on the way.
+    # Later seeds arrive in poses the chain gets to through poses the motors hold.
+    arm = Skeleton.chain(
+        [70.0, 65.0, 60.0, 55.0, 50.0, 45.0, 40.0],
+        limits=[(-r(140), r(140))] * 7,
+        base_angle=-PI / 2,
+    )
+    limits = np.array([6.0e5, 3.5e5, 2.0e5, 1.1e5, 6.0e4, 3.0e4, 1.2e4])
+    strain = _hanging_strain(arm, limits, [1.0, 0.9, 0.8, 0.7, 0.6, 0.5, 0.4], 1400.0)
+    pose = np.radians([-20.0, 1.0, 1.0, 3.0, 6.0, 13.0, -111.0])
+    target = np.array([30.0, -250.0])
+    robust = RobustSolver(arm, "fabrik")
+    robust.strain = strain
+    for _ in range(3 * STILL_CALLS + 10):
+        sol = robust.solve(pose, target, max_iterations=10, tolerance=TOLERANCE)
+    assert sol.status is SolveStatus.SUCCESS and sol.error <= TOLERANCE
+    assert strain(sol.angles) <= HOLDS
+    assert holds_along(strain, pose, sol.angles - pose)
+    assert sol.iterations == 0  # found, and followed
+
+
+def test_an_answer_held_only_at_rest_is_served_at_once_and_followed_when_no_other_is_found():
+    # Only a sharply negative elbow is light enough for the motors, and every way there from
+    # an elbow bent the other way passes a pose they cannot hold: the first arrival they hold
+    # at rest is the answer from the call the search starts on, and stays it.
+    arm = Skeleton.chain([100.0, 100.0])
+    robust = RobustSolver(arm, "dls")
+    robust.strain = lambda angles: 2.0 if angles[1] > -0.3 else 0.5
+    pose, target = np.array([0.3, 0.8]), np.array([120.0, 60.0])
+    answers = [
+        robust.solve(pose, target, max_iterations=10, tolerance=TOLERANCE) for _ in range(40)
+    ]
+    first = answers[STILL_CALLS]
+    assert first.status is SolveStatus.SUCCESS and first.error <= TOLERANCE
+    assert first.angles[1] < -0.3
+    assert all(np.array_equal(sol.angles, first.angles) for sol in answers[STILL_CALLS:])
+    assert answers[STILL_CALLS + 1].iterations > 0  # served while the search went on
+    assert answers[-1].iterations == 0  # the search has ended, and the answer is followed
