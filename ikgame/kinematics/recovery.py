@@ -367,7 +367,7 @@ class RobustSolver:
                     ),
                 ),
                 lambda angles: strain(angles) <= HOLDS,
-                lambda angles: holds_along(strain, start, angles - start),
+                lambda angles: holds_along(strain, start, _short_way(skeleton, angles - start)),
             )
         if plain.status is SolveStatus.SUCCESS:
             # Arriving from where an unfinished search left the chain is that search's answer.
@@ -818,6 +818,17 @@ def holds_along(strain: Callable[[np.ndarray], float], start: np.ndarray, way: n
     False
     """
     return all(strain(start + step * way) <= STRAINED for step in WAY_STEPS)
+
+
+def _short_way(skeleton: Skeleton, turns: np.ndarray) -> np.ndarray:
+    """``turns`` (radians, per joint) with each free joint's the short way round, within
+    [-pi, pi], as the servo turns it; a limited joint's as it is, as it never goes round.
+
+    >>> arm = Skeleton.chain([100, 80], limits=[None, (-3.0, 3.0)])
+    >>> _short_way(arm, np.array([-5.9, -5.9])).round(2).tolist()
+    [0.38, -5.9]
+    """
+    return np.where(skeleton.limited, turns, (turns + math.pi) % _TWO_PI - math.pi)
 
 
 def _far_held_seeds(
