@@ -789,13 +789,14 @@ class Clearance:
     ) -> _Work[list[np.ndarray] | None]:
         """:meth:`route` in steps of work (see :class:`Avoider`); with ``back``, poses each
         reached from the one before in a clear straight line (an earlier route walked back),
-        the way along them is tried when the trees find none (see :meth:`_retracing`); without
-        ``slide``, no sliding trees search (see :meth:`_searching`)."""
+        the way along them is tried when the trees find none in their share (see
+        :meth:`_retracing`); without ``slide``, no sliding trees search and the way back is
+        tried only when the trees find none at all (see :meth:`_searching`)."""
         start = np.asarray(start, float)
         goal = np.asarray(goal, float)
         if (yield from self._checking(start, goal)):
             return [goal]
-        found, keep = yield from self._searching(start, goal, slide=slide)
+        found, keep = yield from self._searching(start, goal, back, slide=slide)
         if found is None and back:
             found = yield from self._retracing(start, goal, back)
         if found is None:
@@ -812,7 +813,12 @@ class Clearance:
         return way
 
     def _searching(
-        self, start: np.ndarray, goal: np.ndarray, *, slide: bool = True
+        self,
+        start: np.ndarray,
+        goal: np.ndarray,
+        back: list[np.ndarray] | None = None,
+        *,
+        slide: bool = True,
     ) -> _Work[tuple[list[np.ndarray] | None, float]]:
         """The poses from ``start`` (excluded) to ``goal`` the trees find (:meth:`_connect`), or
         for a chain the walked way (:meth:`_walking`), and the least gap (px) the lines that
@@ -825,7 +831,8 @@ class Clearance:
         ``TREE_FIRST`` units (or given up sooner); thirty links round a rock got no way from
         2,500 nodes (7.5 million units). Where the walk finds none (for a tree of links, at
         that point), with ``slide`` the sliding trees search next (:meth:`_connect` with
-        ``slide``), and the trees of straight steps go on only if they find none either: from
+        ``slide``; first, with ``back``, the way back along an earlier route, see
+        :meth:`_retracing`), and the trees of straight steps go on only if they find none: from
         the other bend, the way in under the rock of ``27_round_rock`` (the middle joint on its
         stop) took them 10,000 units, and 2,500 straight tries found none. Started later, once
         the straight trees gave up, they found it too late for the chain to follow it in the
@@ -849,7 +856,7 @@ class Clearance:
                         return walked, self.margin
                 if slide:
                     slide = False
-                    slid = yield from self._connect(start, goal, slide=True)
+                    slid = yield from self._sliding_way(start, goal, back)
                     if slid is not None:
                         tree.close()
                         return slid, self.margin / 2.0
@@ -858,8 +865,19 @@ class Clearance:
             if walked is not None:
                 return walked, self.margin
         if found is None and slide:
-            found = yield from self._connect(start, goal, slide=True)
+            found = yield from self._sliding_way(start, goal, back)
         return found, self.margin / 2.0
+
+    def _sliding_way(
+        self, start: np.ndarray, goal: np.ndarray, back: list[np.ndarray] | None
+    ) -> _Work[list[np.ndarray] | None]:
+        """The way back along ``back`` (:meth:`_retracing`), if there is one, else the way the
+        sliding trees find (:meth:`_connect` with ``slide``), or None."""
+        if back:
+            way = yield from self._retracing(start, goal, back)
+            if way is not None:
+                return way
+        return (yield from self._connect(start, goal, slide=True))
 
     def _retracing(
         self, start: np.ndarray, goal: np.ndarray, back: list[np.ndarray]
@@ -874,8 +892,10 @@ class Clearance:
         band a few px wider than they are) rests at the end of the route that led it in, and
         the way out is that route walked back: random trees in joint space seldom find it again
         (on ``27_round_rock`` none did in a search of 107,000 units of work). It is tried only
-        when they find none: where they find a way it is the shorter one (back along the route
-        the chain came by, it reached the next target of ``07_target_on_base`` 0.09 s later)."""
+        once they have done their share (``TREE_FIRST``, and a chain's walk found none) or found
+        none: where they find a way soon it is the shorter one (back along the route the chain
+        came by, it reached the next target of ``07_target_on_base`` 0.09 s later), and a way
+        out the sliding trees find on 27 took the chain 0.5 s longer than the way back."""
         if self.swept(start, back[0]) > AHEAD:
             return None
         here, via = start, []
