@@ -1162,16 +1162,16 @@ class Clearance:
 
     def _sliding(self, here: np.ndarray, toward: np.ndarray) -> _Work[np.ndarray]:
         """The pose one sliding step from ``here`` along the joint change ``toward`` (cut to
-        ``SLIDE_STEP``; the step ``here + toward`` itself when it is that short and keeps
-        every link the margin clear), within the limits (``ITERATION_UNITS`` of work).
+        ``SLIDE_STEP``; ``here + toward`` itself when it is that short and turned by no gap),
+        within the limits (``ITERATION_UNITS`` of work).
 
         The step nearest the one asked for that keeps, to first order, every link near an
-        obstacle (within ``ACTIVE`` of the margin) the margin clear of it: each such gap a row
-        of how fast joint motion widens it, and the rows the step would take below the margin
-        held to it (damped least squares), those it would bring there next too. So a tree
-        slides along an obstacle's surface, and along a stop (where the limits cut the
-        step), instead of stopping there: a narrow passage between obstacles is a way along
-        their surfaces."""
+        obstacle (within ``ACTIVE`` of the margin) the margin and ``SLIDE_ROOM`` clear of it:
+        each such gap a row of how fast joint motion widens it, and the rows the step would
+        take below that held to it (damped least squares), those it would bring there next
+        too. So a tree slides along an obstacle's surface, and along a stop (where the limits
+        cut the step), instead of stopping there: a narrow passage between obstacles is a way
+        along their surfaces."""
         sk = self.skeleton
         short = float(np.abs(toward).max()) <= SLIDE_STEP
         wanted = toward if short else toward * (SLIDE_STEP / float(np.abs(toward).max()))
