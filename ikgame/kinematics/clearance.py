@@ -26,9 +26,14 @@ width). A chain aims its end effector at a point; a tree aims a
   too wide for the trees: once they have done ``TREE_FIRST`` units of work, a chain is led by
   its end instead, drawn ``WALK_STEP`` px at a time along a way in the plane
   (:meth:`Clearance.tip_path`: its links back to the base, then the goal's out, pulled taut
-  clear of the obstacles), each step polished clear from the last, so the links follow; the
-  trees go on if the end falls behind. Either way the pieces are shortened greedily, and the
-  chain is steered through these via poses one after the other. A chain's two trees first grow
+  clear of the obstacles), each step polished clear from the last, so the links follow. If the
+  end falls behind (a tree of links: once the trees have done that share), two new trees grow
+  by sliding steps (at most ``SLIDE_NODES`` poses): a step that would bring a link within the
+  margin and ``SLIDE_ROOM`` of an obstacle is turned along its surface, or along a joint's
+  stop, instead of stopping there, so they follow a narrow passage between obstacles that
+  straight steps seldom sample; the trees of straight steps go on only if they find none.
+  Either way the pieces are shortened greedily, and the chain is steered through these via
+  poses one after the other. A chain's two trees first grow
   along the poses its polish steps through drawing the end from each tree's root toward a point
   out in the open (the retreat), and a tree's piece whose links' gaps at its two ends outweigh how
   far the links can sweep between them is clear without sampling. A route that takes the
@@ -71,6 +76,9 @@ __all__ = [
     "MARGIN",
     "PATH_STEP",
     "ROUTE_NODES",
+    "SLIDE_NODES",
+    "SLIDE_STEP",
+    "SLIDE_ROOM",
     "TREE_FIRST",
     "WALK_STEP",
     "WALK_ITERATIONS",
@@ -104,6 +112,20 @@ ROUTE_NODES: Final = 2500
 last links reaching in under a round rock, in a band a few px wider than they are) took about
 2,100 (1,500 found none), and a search that finds no way does that much more work before it
 gives up."""
+
+SLIDE_NODES: Final = 2500
+"""Most poses the two trees of a sliding search (see :meth:`Clearance._connect`) hold before it
+gives up."""
+
+SLIDE_STEP: Final = 0.3
+"""Largest joint change of one sliding step of a route tree, radians (as ``ROUTE_STEP``: away
+from the obstacles a sliding step is a straight one)."""
+
+SLIDE_ROOM: Final = 2.0
+"""Gap beyond the margin a sliding step keeps each link near an obstacle, px: poses held just at
+the margin leave the straight lines that shorten a route no room to cut a corner, and the
+route in under the round rock of ``27_round_rock`` came in many short pieces, slower to follow
+(its target reached 0.2 to 0.3 s later)."""
 
 WALK_STEP: Final = 10.0
 """How far along its tip path a chain's end is drawn between two poses of a walked way, px."""
@@ -758,16 +780,23 @@ class Clearance:
         return _finish(self._routing(start, goal))
 
     def _routing(
-        self, start: np.ndarray, goal: np.ndarray, back: list[np.ndarray] | None = None
+        self,
+        start: np.ndarray,
+        goal: np.ndarray,
+        back: list[np.ndarray] | None = None,
+        *,
+        slide: bool = True,
     ) -> _Work[list[np.ndarray] | None]:
         """:meth:`route` in steps of work (see :class:`Avoider`); with ``back``, poses each
         reached from the one before in a clear straight line (an earlier route walked back),
-        the way along them is tried when the trees find none (see :meth:`_retracing`)."""
+        the way along them is tried when the trees find none in their share (see
+        :meth:`_retracing`); without ``slide``, no sliding trees search and the way back is
+        tried only when the trees find none at all (see :meth:`_searching`)."""
         start = np.asarray(start, float)
         goal = np.asarray(goal, float)
         if (yield from self._checking(start, goal)):
             return [goal]
-        found, keep = yield from self._searching(start, goal)
+        found, keep = yield from self._searching(start, goal, back, slide=slide)
         if found is None and back:
             found = yield from self._retracing(start, goal, back)
         if found is None:
@@ -784,7 +813,12 @@ class Clearance:
         return way
 
     def _searching(
-        self, start: np.ndarray, goal: np.ndarray
+        self,
+        start: np.ndarray,
+        goal: np.ndarray,
+        back: list[np.ndarray] | None = None,
+        *,
+        slide: bool = True,
     ) -> _Work[tuple[list[np.ndarray] | None, float]]:
         """The poses from ``start`` (excluded) to ``goal`` the trees find (:meth:`_connect`), or
         for a chain the walked way (:meth:`_walking`), and the least gap (px) the lines that
@@ -794,8 +828,15 @@ class Clearance:
 
         The trees search first: where they find a way at all in a few joint dimensions they find
         it in a few thousand units of work. A chain's way is walked once they have done
-        ``TREE_FIRST`` units (or given up sooner), and they go on only if the walk finds none;
-        thirty links round a rock got no way from 2,500 nodes (7.5 million units)."""
+        ``TREE_FIRST`` units (or given up sooner); thirty links round a rock got no way from
+        2,500 nodes (7.5 million units). Where the walk finds none (for a tree of links, at
+        that point), with ``slide`` the sliding trees search next (:meth:`_connect` with
+        ``slide``; first, with ``back``, the way back along an earlier route, see
+        :meth:`_retracing`), and the trees of straight steps go on only if they find none: from
+        the other bend, the way in under the rock of ``27_round_rock`` (the middle joint on its
+        stop) took them 10,000 units, and 2,500 straight tries found none. Started later, once
+        the straight trees gave up, they found it too late for the chain to follow it in the
+        target's time."""
         tree = self._connect(start, goal)
         spent, walk = 0.0, self.skeleton.is_chain
         while True:
@@ -806,17 +847,37 @@ class Clearance:
                 break
             yield units
             spent += units
-            if walk and spent >= TREE_FIRST:
-                walk = False
-                walked = yield from self._walking(start, goal)
-                if walked is not None:
-                    tree.close()
-                    return walked, self.margin
+            if (walk or slide) and spent >= TREE_FIRST:
+                if walk:
+                    walk = False
+                    walked = yield from self._walking(start, goal)
+                    if walked is not None:
+                        tree.close()
+                        return walked, self.margin
+                if slide:
+                    slide = False
+                    slid = yield from self._sliding_way(start, goal, back)
+                    if slid is not None:
+                        tree.close()
+                        return slid, self.margin / 2.0
         if found is None and walk:
             walked = yield from self._walking(start, goal)
             if walked is not None:
                 return walked, self.margin
+        if found is None and slide:
+            found = yield from self._sliding_way(start, goal, back)
         return found, self.margin / 2.0
+
+    def _sliding_way(
+        self, start: np.ndarray, goal: np.ndarray, back: list[np.ndarray] | None
+    ) -> _Work[list[np.ndarray] | None]:
+        """The way back along ``back`` (:meth:`_retracing`), if there is one, else the way the
+        sliding trees find (:meth:`_connect` with ``slide``), or None."""
+        if back:
+            way = yield from self._retracing(start, goal, back)
+            if way is not None:
+                return way
+        return (yield from self._connect(start, goal, slide=True))
 
     def _retracing(
         self, start: np.ndarray, goal: np.ndarray, back: list[np.ndarray]
@@ -831,8 +892,10 @@ class Clearance:
         band a few px wider than they are) rests at the end of the route that led it in, and
         the way out is that route walked back: random trees in joint space seldom find it again
         (on ``27_round_rock`` none did in a search of 107,000 units of work). It is tried only
-        when they find none: where they find a way it is the shorter one (back along the route
-        the chain came by, it reached the next target of ``07_target_on_base`` 0.09 s later)."""
+        once they have done their share (``TREE_FIRST``, and a chain's walk found none) or found
+        none: where they find a way soon it is the shorter one (back along the route the chain
+        came by, it reached the next target of ``07_target_on_base`` 0.09 s later), and a way
+        out the sliding trees find on 27 took the chain 0.5 s longer than the way back."""
         if self.swept(start, back[0]) > AHEAD:
             return None
         here, via = start, []
@@ -1002,8 +1065,12 @@ class Clearance:
             return None
         return [*poses, sol.angles] if (yield from self._checking(pose, sol.angles)) else None
 
-    def _connect(self, start: np.ndarray, goal: np.ndarray) -> _Work[list[np.ndarray] | None]:
-        """RRT-connect in joint space: the poses from ``start`` (excluded) to ``goal``.
+    def _connect(
+        self, start: np.ndarray, goal: np.ndarray, *, slide: bool = False
+    ) -> _Work[list[np.ndarray] | None]:
+        """RRT-connect in joint space: the poses from ``start`` (excluded) to ``goal``; with
+        ``slide``, its trees grow by sliding steps (see :meth:`_extend`), ``SLIDE_NODES`` poses
+        at most.
 
         A chain's two trees first grow along the ways its polish draws the end from each root
         toward the retreat point (:meth:`_retreating`), and the goal's tree reaches for the end of
@@ -1022,12 +1089,16 @@ class Clearance:
             reached, arrived = yield from self._extend(from_goal, from_start.poses[out], reach=True)
             if arrived:
                 return (from_start.lineage(out) + from_goal.lineage(reached)[::-1])[1:]
-        for _ in range(ROUTE_NODES):
+        tries = 0
+        while (from_start.size + from_goal.size < SLIDE_NODES) if slide else tries < ROUTE_NODES:
+            tries += 1
             grow, other = trees
             sample = rng.uniform(low, high)
-            new, _ = yield from self._extend(grow, sample, reach=True)
+            new, _ = yield from self._extend(grow, sample, reach=True, slide=slide)
             if new is not None:
-                reached, arrived = yield from self._extend(other, grow.poses[new], reach=True)
+                reached, arrived = yield from self._extend(
+                    other, grow.poses[new], reach=True, slide=slide
+                )
                 if arrived:
                     a = grow.lineage(new)
                     b = other.lineage(reached)
@@ -1058,11 +1129,13 @@ class Clearance:
         return last
 
     def _extend(
-        self, tree: _Tree, toward: np.ndarray, *, reach: bool = False
+        self, tree: _Tree, toward: np.ndarray, *, reach: bool = False, slide: bool = False
     ) -> _Work[tuple[int | None, bool]]:
         """Grow ``tree`` from its nearest node toward a pose, ``ROUTE_STEP`` at a time (once,
         or with ``reach`` until it gets there or is blocked): the index of the last node added
-        (None if none) and whether it is the pose itself."""
+        (None if none) and whether it is the pose itself. With ``slide``, ``SLIDE_STEP`` at a
+        time, each step turned along the obstacles it would bring a link within the margin of
+        (:meth:`_sliding`), for as long as it brings the tree a tenth of a step nearer."""
         near = tree.nearest(toward)
         yield tree.size * NEAREST_UNITS
         added = None
@@ -1070,14 +1143,67 @@ class Clearance:
             here = tree.poses[near]
             gap = toward - here
             largest = float(np.abs(gap).max())
-            arrived = largest <= ROUTE_STEP
-            nxt = toward if arrived else here + gap * (ROUTE_STEP / largest)
+            if slide:
+                nxt = yield from self._sliding(here, gap)
+                arrived = bool(np.array_equal(nxt, toward))
+                if not arrived and math.dist(nxt, toward) > math.dist(here, toward) - (
+                    SLIDE_STEP / 10.0
+                ):
+                    return added, False
+            else:
+                arrived = largest <= ROUTE_STEP
+                nxt = toward if arrived else here + gap * (ROUTE_STEP / largest)
             gaps = yield from self._stepping(here, tree.gaps[near], nxt)
             if gaps is None:
                 return added, False
             near = added = tree.add(nxt, gaps, near)
             if arrived or not reach:
                 return added, arrived
+
+    def _sliding(self, here: np.ndarray, toward: np.ndarray) -> _Work[np.ndarray]:
+        """The pose one sliding step from ``here`` along the joint change ``toward`` (cut to
+        ``SLIDE_STEP``; ``here + toward`` itself when it is that short and turned by no gap),
+        within the limits (``ITERATION_UNITS`` of work).
+
+        The step nearest the one asked for that keeps, to first order, every link near an
+        obstacle (within ``ACTIVE`` of the margin) the margin and ``SLIDE_ROOM`` clear of it:
+        each such gap a row of how fast joint motion widens it, and the rows the step would
+        take below that held to it (damped least squares), those it would bring there next
+        too. So a tree slides along an obstacle's surface, and along a stop (where the limits
+        cut the step), instead of stopping there: a narrow passage between obstacles is a way
+        along their surfaces."""
+        sk = self.skeleton
+        short = float(np.abs(toward).max()) <= SLIDE_STEP
+        wanted = toward if short else toward * (SLIDE_STEP / float(np.abs(toward).max()))
+        pts = self.points(here)
+        starts, _ = self._links(pts)
+        gap, point, unit = self._pairs(pts)
+        yield ITERATION_UNITS
+        near, obstacles = np.nonzero(gap < self.margin + ACTIVE)
+        step = wanted
+        if near.size:
+            lever = point[near, obstacles][:, None, :] - starts[None, :, :]
+            u = unit[near, obstacles]
+            moved = -lever[..., 1] * u[:, None, 0] + lever[..., 0] * u[:, None, 1]
+            rows = np.where(sk.ancestors[near], moved, 0.0)
+            least = self.margin + SLIDE_ROOM - gap[near, obstacles]
+            held = np.zeros(len(rows), dtype=bool)
+            damping = (0.02 * float(self._lever.max())) ** 2
+            for _ in range(len(rows)):
+                below = (rows @ step < least) & ~held
+                if not below.any():
+                    break
+                held |= below
+                jac = rows[held]
+                lack = least[held] - jac @ wanted
+                step = wanted + jac.T @ np.linalg.solve(
+                    jac @ jac.T + damping * np.eye(len(jac)), lack
+                )
+            largest = float(np.abs(step).max())
+            if largest > SLIDE_STEP:
+                step = step * (SLIDE_STEP / largest)
+        # Unturned, a short step lands on the pose itself (the tree arrives there).
+        return sk.clamp(here + (toward if short and step is wanted else step))
 
     def _link_gaps(self, poses: np.ndarray) -> np.ndarray:
         """(b, n) each link's smallest gap to any obstacle at each of (b, n) poses, px."""
@@ -1501,7 +1627,11 @@ class Avoider:
         :meth:`Clearance._trimming`)."""
         start = np.array(start, dtype=float)
         room = self.clearance
-        way = yield from room._routing(start, goal, self._traveled[::-1])
+        # A jammed goal is only where the chain comes to rest short of a target it cannot
+        # reach, and its search is cut short (``JAMMED_WORK``): the sliding trees found ways
+        # to it where the straight ones found others, and on ``34_chain40_pressed_to_floor``
+        # DLS's chain, resting elsewhere, took 0.64 s longer to the next target.
+        way = yield from room._routing(start, goal, self._traveled[::-1], slide=not jammed)
         if way is None:
             return None
         if target is not None:

@@ -15,6 +15,8 @@ from ikgame.kinematics.clearance import (
     ITERATION_UNITS,
     LEAD,
     SEARCH_BUDGET,
+    SLIDE_ROOM,
+    SLIDE_STEP,
     TREE_FIRST,
     Avoider,
     Clearance,
@@ -262,11 +264,11 @@ def test_a_clear_answer_no_way_leads_to_is_traded_for_a_clear_answer_of_the_seed
     assert room.is_clear(shut_in) and not room.path_clear(start, shut_in)
     connect = Clearance._connect
 
-    def no_way_to_it(self, a, b):
+    def no_way_to_it(self, a, b, slide=False):
         if np.array_equal(b, shut_in):  # as if the limits shut it in behind the shelf
             yield ITERATION_UNITS
             return None
-        return (yield from connect(self, a, b))
+        return (yield from connect(self, a, b, slide=slide))
 
     monkeypatch.setattr(Clearance, "_connect", no_way_to_it)
     guide = Avoider(room, budget=math.inf)
@@ -352,7 +354,7 @@ def test_a_chain_led_in_under_the_rock_is_led_out_the_way_it_came(monkeypatch):
     assert all(room.path_clear(a, b) for a, b in zip([UP_LEFT, *way_in], way_in, strict=False))
     searched = []
 
-    def only_the_way_in(self, a, b):
+    def only_the_way_in(self, a, b, slide=False):
         # The trees found the way in; back out, from the last links under the rock, they find
         # none (none in 1,500 nodes on the stress level).
         searched.append(b)
@@ -369,7 +371,79 @@ def test_a_chain_led_in_under_the_rock_is_led_out_the_way_it_came(monkeypatch):
     up = room.points(UP_LEFT)[-1]
     out = _move_as_told(guide, inside, Solution(UP_LEFT, SolveStatus.SUCCESS, 1, 0.0), up, 400)
     assert room.misses(out, up)[0] <= 0.5
-    assert len(searched) == 2  # the trees found no way out: it is the way in walked back
+    # The trees found no way out: it is the way in walked back, tried before sliding trees.
+    assert len(searched) == 2
+
+
+OTHER_BEND = np.array([-0.3, 0.7, 0.733])
+"""The end up to the left as Jacobian transpose brings it there: the first link leans right, the
+other two bend back left (UP_LEFT's bend the other way)."""
+
+
+def test_from_the_other_bend_the_sliding_trees_find_the_way_in_under_the_rock():
+    # The trees of straight steps find none from here (63,000 units of work, 2,500 tries):
+    # the way in runs with the middle joint on its stop and the last link in the band under
+    # the rock. Sliding along the rock, the floor and the stop, the trees find it.
+    room = _rock_room()
+    work = room._connect(OTHER_BEND, UNDER, slide=True)
+    units = 0.0
+    while True:
+        try:
+            units += next(work)
+        except StopIteration as done:
+            way = done.value
+            break
+    assert way is not None and np.array_equal(way[-1], UNDER)
+    _assert_clear_route(room, OTHER_BEND, UNDER, way)
+    assert units < 20_000
+
+
+def test_the_sliding_trees_search_once_the_walk_finds_none_but_not_for_a_jammed_goal(
+    monkeypatch,
+):
+    room = _rock_room()
+    share = math.ceil(TREE_FIRST / ITERATION_UNITS)
+    log: list[str] = []
+
+    def trees(self, a, b, slide=False):
+        for _ in range(1 if slide else share + 5):
+            log.append("slide" if slide else "tree")
+            yield ITERATION_UNITS
+        return [b.copy()] if slide else None
+
+    def no_walk(self, a, b):
+        log.append("walk")
+        yield ITERATION_UNITS
+
+    monkeypatch.setattr(Clearance, "_connect", trees)
+    monkeypatch.setattr(Clearance, "_walking", no_walk)
+    assert not room.path_clear(OTHER_BEND, UNDER)
+    way = room.route(OTHER_BEND, UNDER)
+    assert way is not None and np.array_equal(way[-1], UNDER)
+    # The straight trees did their share, the walk found nothing, the sliding trees found it.
+    assert log == ["tree"] * share + ["walk", "slide"]
+    log.clear()
+    assert _finish(room._routing(OTHER_BEND, UNDER, slide=False)) is None
+    assert log == ["tree"] * share + ["walk"] + ["tree"] * 5
+
+
+def test_a_sliding_step_turns_along_the_obstacle_it_would_press_into():
+    # Two links lying right, a little down, 7 px above a floor: asked to turn the first down
+    # and the second up, the step holds the first off the floor (at the margin and the room
+    # beyond it, to first order) and turns the second up as far as a step goes.
+    arm = Skeleton.chain([100.0, 100.0], limits=[(-2.0, 2.0)] * 2)
+    floor = Obstacles.from_arrays(np.array([[-300.0, -15.0, 300.0, -15.0, 0.0]]), NO_CIRCLES)
+    room = Clearance(arm, np.full(2, 5.0), floor)
+    here = np.array([-0.03, 0.03])
+    asked = np.array([-0.2, 0.4])
+    assert room.gaps(here + asked * SLIDE_STEP / 0.4).min() < 0.0  # a straight step: into it
+    step = _finish(room._sliding(here, asked)) - here
+    assert abs(step[0]) < 0.02 and step[1] == pytest.approx(SLIDE_STEP)
+    assert room.gaps(here + step).min() >= room.margin + SLIDE_ROOM - 0.1
+    # Nothing near: the step asked, cut to SLIDE_STEP, or the pose itself when that short.
+    far = Clearance(arm, np.full(2, 5.0), Obstacles.from_arrays(NO_SEGMENTS, [[0.0, 500.0, 9.0]]))
+    assert np.allclose(_finish(far._sliding(here, asked)), here + asked * SLIDE_STEP / 0.4)
+    assert np.array_equal(_finish(far._sliding(here, asked / 4.0)), here + asked / 4.0)
 
 
 def test_a_chain_away_from_the_end_of_its_last_route_is_not_sent_back_along_it():
@@ -1038,7 +1112,7 @@ def test_a_solvers_clear_answer_on_a_stop_is_routed_to_only_when_none_off_the_st
     assert room.is_clear(answer) and not room.path_clear(start, answer)
     goals = []
 
-    def straight_there(self, a, b, back=None):
+    def straight_there(self, a, b, back=None, slide=True):
         goals.append(b)
         yield ITERATION_UNITS
         return [b]
@@ -1051,7 +1125,7 @@ def test_a_solvers_clear_answer_on_a_stop_is_routed_to_only_when_none_off_the_st
     # With no way to it, the way to the solver's answer.
     roomy = goal
 
-    def none_to_it(self, a, b, back=None):
+    def none_to_it(self, a, b, back=None, slide=True):
         goals.append(b)
         yield ITERATION_UNITS
         return None if np.array_equal(b, roomy) else [b]
