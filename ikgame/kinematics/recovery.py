@@ -14,7 +14,11 @@ once per tick:
    reaches is returned, for nothing, for as long as that target stays.
 2. **Plain solve** from the measured pose, as the raw solver is called without this class: its
    answer is the nearest to where the chain is. When it arrives, or is still making headway,
-   that is the answer: the common case costs the raw solver's iterations.
+   that is the answer: the common case costs the raw solver's iterations. But while the chain
+   comes in to the last answer, which still reaches (and the motors can hold), a fresh answer
+   more than ``JUMPED`` times as far from the chain, or a plain solve stuck short of the target,
+   gives way to the last answer: a solver whose answer is not continuous in its start (FABRIK
+   against tight limits) would otherwise hand the chain a goal of another shape every tick.
 3. **Recovery**, only when the plain solve stalled short of a target within reach: ``FAILURE``;
    ``PROCESSING`` having gained less than ``STALL_PROGRESS`` of its start error; or
    ``STALL_CALLS`` calls on one target without arriving. It restarts from other seeds, the
@@ -93,6 +97,7 @@ __all__ = [
     "RETRY_CALLS",
     "STALL_CALLS",
     "SETTLED",
+    "JUMPED",
     "STILL_CALLS",
     "STRAINED",
     "HOLDS",
@@ -150,6 +155,14 @@ kept on the target (see ``_relieved``)."""
 
 RELIEF_TURN: Final = 0.05
 """Radians: the most one joint turns in one step of that slide."""
+
+JUMPED: Final = 2.0
+"""A fresh answer more than this many times as far from the chain (its largest joint turn) as
+the last answer, which the chain is coming in to and which still reaches, has jumped to another
+shape: the last answer is kept (see ``RobustSolver._kept``). From poses on the way in, a
+continuous solver's fresh answers lie about as far from the chain as the last one (1.0 to 1.1
+times as far, CCD's on `15_zero_g_light`); FABRIK's against limits of +-7 deg jumped to four
+times as far."""
 
 RANDOM_SEED: Final = 20091
 """Seed of the generator that draws the random restarts, fresh for every search."""
@@ -307,6 +320,8 @@ class RobustSolver:
         self._pending: _Goal | None = None
         self._waiting = 0
         self._unheld: _Goal | None = None
+        # The cached plain answer and how far the chain was from it at the last call.
+        self._approach: tuple[_Answer, float] | None = None
 
     def solve(
         self,
@@ -342,6 +357,14 @@ class RobustSolver:
             self._skeleton, start, goal, max_iterations=max_iterations, tolerance=tol
         )
         skeleton = self._skeleton
+        before = (
+            0.0
+            if plain.status is SolveStatus.SUCCESS
+            else math.sqrt(chain.error_sqr(skeleton.clamp(start).tolist(), *goal))
+        )
+        kept = self._kept(measured, plain, goal, tol, _stuck(plain, before))
+        if kept is not None:
+            return kept
         target = np.array(goal)
         strain = self.strain
         if (
@@ -375,13 +398,13 @@ class RobustSolver:
             followed = (
                 search is not None and search.aims_at(np.array(goal), tol) and search.best_far
             )
-            return self._keep(plain, goal, followed)
+            return self._approached(measured, self._keep(plain, goal, followed))
         return self._recover(
             plain,
             goal,
             target,
             tol,
-            math.sqrt(chain.error_sqr(skeleton.clamp(start).tolist(), *goal)),
+            before,
             lambda angles: (_error(skeleton, angles, target), None),
             lambda stalled: (
                 _near_seeds(skeleton, self._solve, skeleton.clamp(start), stalled),
@@ -445,10 +468,14 @@ class RobustSolver:
         plain = self._solve_targets(
             skeleton, start, targets, max_iterations=max_iterations, tolerance=tol
         )
+        before = 0.0 if plain.status is SolveStatus.SUCCESS else measure(skeleton.clamp(start))[0]
+        kept = self._kept(measured, plain, goal, tol, _stuck(plain, before))
+        if kept is not None:
+            return kept
         if plain.status is SolveStatus.SUCCESS:
             search = self._search
             followed = search is not None and search.aims_at(targets, tol) and search.best_far
-            return self._keep(plain, goal, followed)
+            return self._approached(measured, self._keep(plain, goal, followed))
         carried, self._carried = self._carried, False
         if carried and _out_of_reach(skeleton, targets, tol):
             # While the base carries the skeleton toward targets still beyond their branches'
@@ -460,7 +487,7 @@ class RobustSolver:
             goal,
             targets,
             tol,
-            measure(skeleton.clamp(start))[0],
+            before,
             measure,
             lambda stalled: (
                 _near_seeds(
@@ -511,6 +538,61 @@ class RobustSolver:
             return None
         return Solution(answer.angles, SolveStatus.SUCCESS, 0, error, errors)
 
+    def _kept(
+        self, measured: list[float], plain: Solution, goal: _Goal, tol: float, stuck: bool
+    ) -> Solution | None:
+        """The last answer instead of the new ``plain`` one while the chain comes in to it, or
+        None: when the last answer still reaches the same goal in the same frame, the motors can
+        hold it (when :attr:`strain` is known), the chain has come nearer it since the last call
+        (its largest joint turn to it shrank) without having arrived (within ``SETTLED``), and
+        ``plain`` is ``stuck`` (it would start a search from far seeds) or lies more than
+        ``JUMPED`` times as far from the chain.
+
+        Solved afresh from a pose in motion, a solver whose answer is not continuous in its
+        start (FABRIK's passes against tight limits: starts 0.15 deg apart, answers 12 deg
+        apart; CCD's elbow flipped over by a fresh solve as the tip swept by) hands the servo a
+        goal of another shape tick after tick, and the chain, braking for one and thrown toward
+        the next, swings past the target; a search from far seeds after a stuck solve does the
+        same. A continuous solver's fresh answer, from a pose on the way in, is about as near
+        as the last one and is taken: it steers the end's course (the last answer kept whenever
+        it was the nearer, the eight light links of `15_zero_g_light` took 0.83 s to reach
+        their targets with CCD instead of 0.71). Once the chain has arrived or no longer comes
+        nearer (at rest, sagging off it), the fresh answer takes over, solved from where the
+        motors hold the chain.
+        """
+        answer = self._answer
+        if (
+            answer is None
+            or answer.frame is not self._frame
+            or answer.target != goal
+            or answer.status is not SolveStatus.SUCCESS
+            or answer.error > tol
+        ):
+            return None
+        last = self._approach
+        gap = _gap(self._free, measured, answer.listed)
+        self._approach = (answer, gap)
+        if last is None or last[0] is not answer or not SETTLED < gap < last[1]:
+            return None
+        if not stuck and JUMPED * gap >= _gap(self._free, measured, plain.angles.tolist()):
+            return None
+        strain = self.strain
+        if strain is not None and strain(answer.angles) > STRAINED:
+            return None
+        self._search = None
+        return Solution(
+            answer.angles, SolveStatus.SUCCESS, plain.iterations, answer.error, answer.errors
+        )
+
+    def _approached(self, measured: list[float], solution: Solution) -> Solution:
+        """``solution``, just cached, noted with how far the chain is from it (see
+        :meth:`_kept`)."""
+        answer = self._answer
+        self._approach = (
+            None if answer is None else (answer, _gap(self._free, measured, answer.listed))
+        )
+        return solution
+
     def _stretched(self, goal: tuple[float, float], tol: float) -> Solution | None:
         """The chain stretched toward a goal at or beyond its reach, when the limits allow it."""
         chain = self._chain
@@ -541,11 +623,7 @@ class RobustSolver:
         per-target errors; ``seeds(stalled)`` the near and far restarts from a stalled pose.
         """
         skeleton = self._skeleton
-        stalled = (
-            plain.status is SolveStatus.FAILURE
-            or before - plain.error < STALL_PROGRESS * before
-            or self._waiting >= STALL_CALLS
-        )
+        stalled = _stuck(plain, before) or self._waiting >= STALL_CALLS
         search = self._search
         if search is not None and search.accept is not None:
             # A search for a pose the motors can hold counts only such arrivals; a stall takes
@@ -992,6 +1070,23 @@ def _aimed(skeleton: Skeleton, angles: np.ndarray, target: np.ndarray) -> np.nda
     aimed = angles.copy()
     aimed[0] = min(choices, key=lambda c: abs(c - angles[0]))
     return aimed
+
+
+def _stuck(plain: Solution, before: float) -> bool:
+    """Whether a plain solve that started ``before`` px from its goal stuck short of it: it
+    failed, or gained less than ``STALL_PROGRESS`` of that."""
+    return plain.status is SolveStatus.FAILURE or (
+        plain.status is SolveStatus.PROCESSING and before - plain.error < STALL_PROGRESS * before
+    )
+
+
+def _gap(free_joints: list[bool], measured: list[float], answer: list[float]) -> float:
+    """The largest turn (radians) any joint of ``measured`` has to make to ``answer`` (a free
+    joint the short way round)."""
+    return max(
+        abs(wrap_angle(a - m)) if free else abs(a - m)
+        for m, a, free in zip(measured, answer, free_joints, strict=True)
+    )
 
 
 def _within(free_joints: list[bool], measured: list[float], answer: list[float]) -> bool:

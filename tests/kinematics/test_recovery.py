@@ -22,7 +22,14 @@ from ikgame.kinematics import (
     TargetSet,
     forward_kinematics,
 )
-from ikgame.kinematics.recovery import HOLDS, RESTART_BUDGET, STILL_CALLS, holds_along
+from ikgame.kinematics.recovery import (
+    HOLDS,
+    JUMPED,
+    RESTART_BUDGET,
+    SETTLED,
+    STILL_CALLS,
+    holds_along,
+)
 
 PI = math.pi
 NAMES = sorted(SOLVERS)
@@ -315,6 +322,54 @@ def test_a_plain_answer_is_solved_again_until_the_chain_settles_on_it():
     down = robust.solve(np.array([1.0, -1.0]), target, tolerance=TOLERANCE)
     assert down.status is SolveStatus.SUCCESS and down.angles[1] < 0
     assert robust.solve(down.angles, target, tolerance=TOLERANCE).iterations == 0
+
+
+def _coming_in(robust: RobustSolver, start: np.ndarray, target: np.ndarray, ticks: int = 30):
+    """Each call's answer and the pose it was solved from, the chain brought a fifth of the way
+    to the last answer between calls (as a servo brings it in)."""
+    measured, calls = start, []
+    for _ in range(ticks):
+        sol = robust.solve(measured, target, tolerance=TOLERANCE)
+        calls.append((measured, sol))
+        measured = measured + 0.2 * (sol.angles - measured)
+    return calls
+
+
+def _gap(angles: np.ndarray, measured: np.ndarray) -> float:
+    return float(np.abs(angles - measured).max())
+
+
+def test_an_answer_that_jumps_to_another_shape_is_not_taken_while_the_chain_comes_in():
+    # Against limits of +-7 deg, FABRIK's answer is not continuous in its start: solved afresh
+    # from the poses of a chain coming in to its answer, it jumps to answers of another shape,
+    # several times as far from the chain. Handed to the servo tick after tick, they threw
+    # `42_eight_links_tight_limits`'s tip 70 px past its target.
+    chain = Skeleton.chain([45.0] * 8, base_angle=PI / 2, limits=[(r(-7), r(7))] * 8)
+    rng = np.random.default_rng(7)
+    raw_jumps = 0
+    for _ in range(12):
+        start = _in_limits(rng, chain)
+        target = _end(chain, rng.uniform(r(-6), r(6), 8))
+        calls = _coming_in(RobustSolver(chain, "fabrik"), start, target)
+        for (_, last), (measured, sol) in zip(calls, calls[1:], strict=False):
+            if last.status is not SolveStatus.SUCCESS or _gap(last.angles, measured) <= SETTLED:
+                continue
+            assert _gap(sol.angles, measured) <= JUMPED * _gap(last.angles, measured)
+            raw = SOLVERS["fabrik"](chain, measured, target, tolerance=TOLERANCE)
+            raw_jumps += _gap(raw.angles, measured) > JUMPED * _gap(last.angles, measured)
+    assert raw_jumps >= 5
+
+
+@pytest.mark.parametrize("name", ["ccd", "dls"])
+def test_a_continuous_solvers_fresh_answers_steer_the_chain_coming_in(name):
+    # From poses on the way in, a continuous solver's answers move about as the chain does:
+    # each fresh one is taken, solved from the measured pose, not the first kept.
+    chain = Skeleton.chain([90.0, 80.0, 70.0, 60.0], limits=[(r(-150), r(150))] * 4)
+    start = np.array([0.3, 0.4, 0.2, 0.1])
+    calls = _coming_in(RobustSolver(chain, name), start, np.array([40.0, 190.0]))
+    fresh = [sol for _, sol in calls[1:] if sol.iterations > 0]
+    assert len(fresh) >= 10
+    assert all(sol.status is SolveStatus.SUCCESS for _, sol in calls)
 
 
 @pytest.mark.parametrize("name", NAMES)
