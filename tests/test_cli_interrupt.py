@@ -139,4 +139,4 @@ def test_after_sigkill_the_workers_die_and_a_forced_rerun_leaves_one_whole_run(t
     assert not (out / "run.gif").exists(), "a file of the killed run survived the rerun"
     results = (out / "results.json").read_text()
     frames = _frames(out)
-    assert len(frames) == 1 and f'"count": 1' in results
+    assert len(frames) == 1 and '"count": 1' in results
