@@ -156,9 +156,19 @@ def test_two_runs_give_byte_identical_frames(tmp_path):
     assert all(x.read_bytes() == y.read_bytes() for x, y in zip(a, b, strict=True))
 
 
+def _first_frame_only(level_text: str) -> str:
+    """A shipped level's text cut to its first frame (five ticks at 240 Hz, one frame at 30 fps):
+    all a test of how that frame is drawn or stored needs to run."""
+    assert "duration = 20.0\n" in level_text
+    return level_text.replace("duration = 20.0\n", "duration = 0.02\n", 1)
+
+
 def test_png_compression_reaches_the_frames_and_is_checked(tmp_path, capsys):
+    level = tmp_path / "short.toml"
+    level.write_text(_first_frame_only((ROOT / "levels" / "01_first_reach.toml").read_text()))
     out = tmp_path / "run"
-    args = ["run", "--quiet", "--size", "160x90", "--no-gif", "--workers", "1", "--out", str(out)]
+    args = ["run", str(level), "--quiet", "--size", "160x90", "--no-gif", "--workers", "1"]
+    args += ["--out", str(out)]
     assert main([*args, "--png-compression", "0"]) == 0
     # Level 0 stores the pixels uncompressed: a filter byte per row plus 3 bytes per pixel.
     assert (out / "frames/000000.png").stat().st_size > 90 * (1 + 160 * 3)
@@ -244,7 +254,8 @@ def test_run_uses_the_level_theme_unless_told_otherwise(tmp_path):
     from PIL import Image
 
     level = tmp_path / "dark.toml"
-    text = (ROOT / "levels" / "01_first_reach.toml").read_text()
+    # Cut to its first frame, the one looked at.
+    text = _first_frame_only((ROOT / "levels" / "01_first_reach.toml").read_text())
     level.write_text(text.replace("[level]\n", '[level]\ntheme = "dark"\n', 1))
     corners = {}
     for name, extra in (("own", []), ("light", ["--theme", "light"])):
@@ -475,8 +486,14 @@ def test_a_missing_sprite_exits_2_naming_its_line_in_run_and_validate(tmp_path, 
 
 
 def test_a_skinned_level_gives_the_same_frames_serial_and_in_workers(tmp_path):
+    # Its first 4 s (120 frames, enough for every worker to draw several): the sprites of every
+    # link and prop are in each frame from the first.
+    level = tmp_path / "skinned.toml"
+    text = (ROOT / "levels" / "14_skinned_arm.toml").read_text()
+    assert "duration = 12.0\n" in text
+    level.write_text(text.replace("duration = 12.0\n", "duration = 4.0\n", 1))
     for name, workers in (("a", "1"), ("b", "2")):
-        args = ["run", "14_skinned_arm", "--quiet", "--no-gif", "--size", "96x54"]
+        args = ["run", str(level), "--quiet", "--no-gif", "--size", "96x54"]
         assert main([*args, "--workers", workers, "--out", str(tmp_path / name)]) == 0
     a = sorted((tmp_path / "a/frames").iterdir())
     b = sorted((tmp_path / "b/frames").iterdir())
