@@ -91,20 +91,25 @@ def _motion_header(scene: Scene, snapshots: Sequence[Snapshot]) -> dict[str, Any
 
 
 def _motion_frame(scene: Scene, snap: Snapshot) -> dict[str, Any]:
+    # Read as lists of floats: the same values, without a numpy scalar made for each number.
     angles = np.asarray(snap.angles, dtype=float)
     error = float(snap.error)
     frame = {
         "time": _round(snap.time, 6),
         "tick": int(snap.tick),
         "step_index": int(snap.step_index),
-        "angles_rad": [_round(a, 6) for a in angles],
-        "angles_deg": [_round(a, 4) for a in np.degrees(angles)],
-        "world_angles_rad": [_round(a, 6) for a in np.asarray(snap.world_angles, dtype=float)],
-        "joints": [[_round(x, 3), _round(y, 3)] for x, y in np.asarray(snap.joints, dtype=float)],
+        "angles_rad": [_round(a, 6) for a in angles.tolist()],
+        "angles_deg": [_round(a, 4) for a in np.degrees(angles).tolist()],
+        "world_angles_rad": [
+            _round(a, 6) for a in np.asarray(snap.world_angles, dtype=float).tolist()
+        ],
+        "joints": [
+            [_round(x, 3), _round(y, 3)] for x, y in np.asarray(snap.joints, dtype=float).tolist()
+        ],
         "target": None if snap.target is None else [_round(v, 3) for v in snap.target],
         "error": _length(error),
         "solver_status": str(snap.solver_status),
-        "torque_limited": [bool(v) for v in np.asarray(snap.torque_limited, dtype=bool)],
+        "torque_limited": np.asarray(snap.torque_limited, dtype=bool).tolist(),
     }
     if scene.is_tree:
         del frame["target"]
