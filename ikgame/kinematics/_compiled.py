@@ -6,9 +6,9 @@ calls), not a second implementation: the same operations in the same order, no f
 the same floats, and a run gives the same results with numba or without it (tests compare the
 two bit for bit). Only chains of :data:`COMPILED_LINKS` links or more use it: below that,
 crossing into compiled code costs about what it saves, and a short run does not pay numba's
-import (about half a second) or its compiling (a second or two, once per process, or once for
-good where numba can cache on disk beside the package). ``IKGAME_COMPILED=0`` in the environment
-turns it off.
+import (about half a second) or its compiling (a second or two, once per process: nothing is
+cached on disk, since numba would refresh a cached loop only when its own module changes, not
+when the helpers it calls do). ``IKGAME_COMPILED=0`` in the environment turns it off.
 """
 
 from __future__ import annotations
