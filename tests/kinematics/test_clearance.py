@@ -1,4 +1,6 @@
 import math
+from collections.abc import Generator
+from typing import TypeVar
 
 import numpy as np
 import pytest
@@ -380,19 +382,25 @@ OTHER_BEND = np.array([-0.3, 0.7, 0.733])
 other two bend back left (UP_LEFT's bend the other way)."""
 
 
-def test_from_the_other_bend_the_sliding_trees_find_the_way_in_under_the_rock():
-    # The trees of straight steps find none from here (63,000 units of work, 2,500 tries):
-    # the way in runs with the middle joint on its stop and the last link in the band under
-    # the rock. Sliding along the rock, the floor and the stop, the trees find it.
-    room = _rock_room()
-    work = room._connect(OTHER_BEND, UNDER, slide=True)
+T = TypeVar("T")
+
+
+def _worked(work: Generator[float, None, T]) -> tuple[T, float]:
+    """What a search in steps of work returns, and the units of work it took."""
     units = 0.0
     while True:
         try:
             units += next(work)
         except StopIteration as done:
-            way = done.value
-            break
+            return done.value, units
+
+
+def test_from_the_other_bend_the_sliding_trees_find_the_way_in_under_the_rock():
+    # The trees of straight steps find none from here (63,000 units of work, 2,500 tries):
+    # the way in runs with the middle joint on its stop and the last link in the band under
+    # the rock. Sliding along the rock, the floor and the stop, the trees find it.
+    room = _rock_room()
+    way, units = _worked(room._connect(OTHER_BEND, UNDER, slide=True))
     assert way is not None and np.array_equal(way[-1], UNDER)
     _assert_clear_route(room, OTHER_BEND, UNDER, way)
     assert units < 20_000
@@ -525,14 +533,7 @@ def test_a_long_chain_is_led_round_the_rock_by_its_end_where_the_trees_find_no_w
     left, low = _up_left_and_low(room)
     searched: list[np.ndarray] = []
     monkeypatch.setattr(Clearance, "_connect", _no_tree(searched))
-    units = 0.0
-    work = room._routing(left, low)
-    while True:
-        try:
-            units += next(work)
-        except StopIteration as done:
-            way = done.value
-            break
+    way, units = _worked(room._routing(left, low))
     assert way is not None and len(searched) == 1  # the trees gave up; the walk found it
     assert all(room.path_clear(a, b) for a, b in zip([left, *way], way, strict=False))
     assert room.misses(way[-1], LOW_BEYOND)[0] <= 1.0
