@@ -1,5 +1,5 @@
-"""Shared test helpers: small levels built in code, a video probe, and a level file for the
-live tools."""
+"""Shared test helpers: small levels built in code, a video probe, a level file for the live
+tools, and a numba that cannot compile."""
 
 from __future__ import annotations
 
@@ -19,6 +19,19 @@ from ikgame.level.model import Level
 # only when a shared machine is busy, so it is off.
 settings.register_profile("ikgame", derandomize=True, suppress_health_check=[HealthCheck.too_slow])
 settings.load_profile("ikgame")
+
+
+@pytest.fixture
+def numba_without_compiler(monkeypatch: pytest.MonkeyPatch) -> str:
+    """numba installed but failing to compile anything (``numba.njit`` raises): the compiled
+    loops must fall back to Python with a warning. Returns the warning's text to match."""
+    numba = pytest.importorskip("numba")
+
+    def broken(**options: object) -> object:
+        raise RuntimeError("no compiler here")
+
+    monkeypatch.setattr(numba, "njit", broken)
+    return "runs in Python: no compiler here"
 
 
 @pytest.fixture

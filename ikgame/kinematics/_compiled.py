@@ -15,14 +15,13 @@ from __future__ import annotations
 
 import functools
 import math
-import os
 from collections.abc import Callable
 from types import ModuleType
-from typing import TYPE_CHECKING, Final
+from typing import TYPE_CHECKING, Final, TypeVar
 
 import numpy as np
 
-from ikgame._numba import compiled
+from ikgame._numba import compiled, turned_off
 
 if TYPE_CHECKING:
     from ikgame.kinematics._floats import FloatChain
@@ -53,9 +52,7 @@ def compiled_pass(chain: FloatChain) -> Pass | None:
     >>> compiled_pass(FloatChain(Skeleton.chain([10.0, 10.0]))) is None  # too short to pay
     True
     """
-    if len(chain.lengths) < COMPILED_LINKS or os.environ.get("IKGAME_COMPILED") == "0":
-        return None
-    kernel = _kernel()
+    kernel = _built(len(chain.lengths), COMPILED_LINKS, _kernel)
     if kernel is None:
         return None
     lengths, lower, upper = (
@@ -99,9 +96,7 @@ def compiled_end(chain: FloatChain) -> End | None:
     >>> compiled_end(FloatChain(Skeleton.chain([10.0, 10.0]))) is None  # too short to pay
     True
     """
-    if len(chain.lengths) < COMPILED_END_LINKS or os.environ.get("IKGAME_COMPILED") == "0":
-        return None
-    kernel = _forward_kernel()
+    kernel = _built(len(chain.lengths), COMPILED_END_LINKS, _forward_kernel)
     if kernel is None:
         return None
     lengths = np.array(chain.lengths, dtype=float)
@@ -120,6 +115,17 @@ def compiled_end(chain: FloatChain) -> End | None:
         return float(joint_x[-1]), float(joint_y[-1])
 
     return end
+
+
+K = TypeVar("K")
+
+
+def _built(links: int, fewest: int, kernel: Callable[[], K | None]) -> K | None:
+    """``kernel()``, or None for a chain of fewer than ``fewest`` links (compiling would not
+    pay) or with the compiled loops turned off (:func:`~ikgame._numba.turned_off`)."""
+    if links < fewest or turned_off():
+        return None
+    return kernel()
 
 
 @functools.cache

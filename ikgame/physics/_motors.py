@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import ctypes
 import functools
-import os
 from collections.abc import Callable
 from types import ModuleType
 from typing import Any
@@ -25,7 +24,7 @@ from typing import Any
 import numpy as np
 from pymunk import _chipmunk_cffi as _chipmunk
 
-from ikgame._numba import compiled
+from ikgame._numba import compiled, turned_off
 
 __all__ = ["CompiledMotors", "compiled_motors"]
 
@@ -58,9 +57,7 @@ class CompiledMotors:
 
 def compiled_motors(structs: list[Any]) -> CompiledMotors | None:
     """``structs``' writes and reads compiled, or None: no numba, or turned off."""
-    if os.environ.get("IKGAME_COMPILED") == "0":
-        return None
-    kernels = _kernels()
+    kernels = None if turned_off() else _kernels()
     return None if kernels is None else CompiledMotors(structs, kernels)
 
 

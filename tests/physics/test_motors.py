@@ -79,17 +79,11 @@ def test_compiled_motors_check_their_inputs() -> None:
 
 
 def test_a_numba_that_cannot_compile_leaves_the_motors_in_python(
-    monkeypatch: pytest.MonkeyPatch,
+    numba_without_compiler: str,
 ) -> None:
-    import numba
-
-    def broken(**options: object) -> object:
-        raise RuntimeError("no compiler here")
-
-    monkeypatch.setattr(numba, "njit", broken)
     _motors._kernels.cache_clear()
     try:
-        with pytest.warns(RuntimeWarning, match="runs in Python: no compiler here"):
+        with pytest.warns(RuntimeWarning, match=numba_without_compiler):
             assert _motors._kernels() is None
         assert World(_level(SWEEP_LINKS + 1))._compiled is None
     finally:
