@@ -742,7 +742,20 @@ class Clearance:
         """Whether the straight joint-space line from ``a`` to ``b`` keeps every link half the
         margin clear (the motors do not follow the line exactly, and a link rubbing along an
         obstacle drags). A start already closer than that may only get farther."""
+        a, b = np.asarray(a, float), np.asarray(b, float)
+        if len(self.obstacles) and self._proven_clear(a, b, self.margin / 2.0) is not None:
+            return True
         return _finish(self._checking(a, b))
+
+    def _proven_clear(self, a: np.ndarray, b: np.ndarray, floor: float) -> float | None:
+        """A gap (px) every link keeps all along the straight line from ``a`` to ``b``, from
+        its gaps at the two ends alone, when that proves the line as clear as sampling it would
+        (:func:`_least_gap` of ``floor``): a link's gap shrinks no faster than its points move
+        (see :meth:`_stepping`). None when it does not prove it: sample the line then."""
+        ends = self._link_gaps(np.stack((a, b)))
+        bar = _least_gap(floor, float(ends[0].min()))
+        least = float(np.min(ends[0] + ends[1] - self.swept_links(a, b))) / 2.0
+        return least if bar > 0.0 and least >= bar else None
 
     def _checking(self, a: np.ndarray, b: np.ndarray, keep: float | None = None) -> _Work[bool]:
         """:meth:`path_clear`, ``PATH_CHUNK`` poses a step, stopping at the first chunk that
@@ -1726,7 +1739,10 @@ class Avoider:
         the new line is within ``slack`` px (the larger of how far the chain is off the old line
         and how far the new end is from the old one) of a pose of the old line's rest, so the
         old line's smallest gap less that slack bounds the new one's, and the line is sampled
-        afresh only when that bound runs out.
+        afresh only when that bound runs out. Nor is a line sampled that each link's gaps at
+        its two ends prove clear (:meth:`Clearance._proven_clear`): the answer is the same,
+        and a long swing near the floor cost 7 ms of sampling in one tick, on top of the
+        search's budget.
         """
         room = self.clearance
         floor = room.margin / 2.0
@@ -1739,6 +1755,10 @@ class Avoider:
             slack = max(room.swept(start + s * d, measured), room.swept(end, pose))
             if gap - slack >= floor:
                 return True
+        least = room._proven_clear(measured, pose, floor)
+        if least is not None:
+            self._line = (measured.copy(), pose.copy(), least)
+            return True
         gaps = room.path_gaps(measured, pose)
         clear = _clear_along(gaps, floor)
         self._line = (measured.copy(), pose.copy(), float(gaps.min())) if clear else None

@@ -24,6 +24,7 @@ from ikgame.kinematics.clearance import (
     Clearance,
     Obstacles,
     _capped,
+    _clear_along,
     _finish,
 )
 
@@ -708,6 +709,32 @@ def test_the_avoider_steers_round_the_shelf_and_passes_clear_answers_through():
     up = np.array([0.1, 0.1, 0.1])
     answer = Solution(np.array([0.12, 0.1, 0.1]), SolveStatus.SUCCESS, 3, 0.2)
     assert open_air.steer(up, answer, np.array([-50.0, 350.0]), 0.5) is answer
+
+
+def test_a_straight_line_is_judged_as_its_sampled_poses_judge_it(monkeypatch):
+    room = _shelf_room()
+    rng = np.random.default_rng(7)
+    floor = room.margin / 2.0
+    sampled = room.path_gaps
+    calls = []
+    monkeypatch.setattr(room, "path_gaps", lambda a, b: calls.append(1) or sampled(a, b))
+    verdicts = set()
+    for _ in range(200):
+        a, b = rng.uniform(-1.5, 1.5, (2, 3))
+        # A fresh avoider each time: no line checked before to go by.
+        clear = Avoider(room)._clear_way(a, b)
+        assert clear == _clear_along(sampled(a, b), floor)
+        assert room.path_clear(a, b) == _finish(room._checking(a, b))
+        verdicts.add(clear)
+    assert verdicts == {True, False}
+    # Links whose gaps at both ends outweigh how far they sweep are clear without sampling.
+    calls.clear()
+    checks = []
+    checking = room._checking
+    monkeypatch.setattr(room, "_checking", lambda a, b: checks.append(1) or checking(a, b))
+    a, b = np.array([0.0, 0.1, 0.0]), np.array([0.2, 0.0, 0.1])
+    assert Avoider(room)._clear_way(a, b) and room.path_clear(a, b)
+    assert calls == [] and checks == []
 
 
 def test_a_chain_at_rest_in_the_open_is_not_measured_again(monkeypatch):
