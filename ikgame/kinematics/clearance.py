@@ -404,11 +404,15 @@ class Clearance:
         radii = self.radii[:, None] + self._r
         return sign * d - radii, point, sign[..., None] * unit
 
-    def _gaps(self, pts: np.ndarray) -> np.ndarray:
-        """Signed gaps (..., n, k) between links and obstacles, without the directions."""
+    def _gaps(self, pts: np.ndarray, links: np.ndarray | None = None) -> np.ndarray:
+        """Signed gaps (..., n, k) between links and obstacles, without the directions; with
+        ``links`` (indices), those links' only (..., len(links), k), the same numbers."""
         q0, q1 = self._a, self._b
         starts, ends = self._links(pts)
-        if self.skeleton.is_chain:
+        radii = self.radii
+        if links is not None:
+            starts, ends, radii = starts[..., links, :], ends[..., links, :], radii[links]
+        if self.skeleton.is_chain and links is None:
             # A chain's links share their joints: each joint's distance is computed once.
             joints = _distance_to(pts[..., :, None, :], q0, q1)  # (..., n + 1, k)
             near_start, near_end = joints[..., :-1, :], joints[..., 1:, :]
@@ -421,7 +425,7 @@ class Clearance:
         tips = _distance_to(obstacle_ends, p0, p1).min(axis=-3)  # (..., n, k)
         d = np.minimum(np.minimum(near_start, near_end), tips)
         crossing = _crossing(starts, ends, q0, q1)
-        return np.where(crossing, -d, d) - (self.radii[:, None] + self._r)
+        return np.where(crossing, -d, d) - (radii[:, None] + self._r)
 
     def gaps(self, angles: np.ndarray) -> np.ndarray:
         """(n,) each link's smallest gap to any obstacle, px (inf with none; < 0 overlapping)."""
@@ -743,19 +747,21 @@ class Clearance:
         margin clear (the motors do not follow the line exactly, and a link rubbing along an
         obstacle drags). A start already closer than that may only get farther."""
         a, b = np.asarray(a, float), np.asarray(b, float)
-        if len(self.obstacles) and self._proven_clear(a, b, self.margin / 2.0) is not None:
-            return True
+        if len(self.obstacles):
+            bar, kept = self._line_bound(a, b, self.margin / 2.0)
+            if bar > 0.0 and kept.min() >= bar:
+                return True
         return _finish(self._checking(a, b))
 
-    def _proven_clear(self, a: np.ndarray, b: np.ndarray, floor: float) -> float | None:
-        """A gap (px) every link keeps all along the straight line from ``a`` to ``b``, from
-        its gaps at the two ends alone, when that proves the line as clear as sampling it would
-        (:func:`_least_gap` of ``floor``): a link's gap shrinks no faster than its points move
-        (see :meth:`_stepping`). None when it does not prove it: sample the line then."""
+    def _line_bound(self, a: np.ndarray, b: np.ndarray, floor: float) -> tuple[float, np.ndarray]:
+        """The least gap (px) the straight line from ``a`` to ``b`` may come to
+        (:func:`_least_gap` of ``floor`` and the start's), and (n,) a gap each link keeps all
+        along it from its gaps at the two ends alone: a link's gap shrinks no faster than its
+        points move (see :meth:`_stepping`), so where a link's bound is at least that least gap
+        (and that is above zero) sampling the line would find the link clear too."""
         ends = self._link_gaps(np.stack((a, b)))
         bar = _least_gap(floor, float(ends[0].min()))
-        least = float(np.min(ends[0] + ends[1] - self.swept_links(a, b))) / 2.0
-        return least if bar > 0.0 and least >= bar else None
+        return bar, (ends[0] + ends[1] - self.swept_links(a, b)) / 2.0
 
     def _checking(self, a: np.ndarray, b: np.ndarray, keep: float | None = None) -> _Work[bool]:
         """:meth:`path_clear`, ``PATH_CHUNK`` poses a step, stopping at the first chunk that
@@ -1739,9 +1745,9 @@ class Avoider:
         the new line is within ``slack`` px (the larger of how far the chain is off the old line
         and how far the new end is from the old one) of a pose of the old line's rest, so the
         old line's smallest gap less that slack bounds the new one's, and the line is sampled
-        afresh only when that bound runs out. Nor is a line sampled that each link's gaps at
-        its two ends prove clear (:meth:`Clearance._proven_clear`): the answer is the same,
-        and a long swing near the floor cost 7 ms of sampling in one tick, on top of the
+        afresh only when that bound runs out. Nor is a link sampled along the line that its
+        gaps at the two ends prove clear (:meth:`Clearance._line_bound`): the answer is the
+        same, and a long swing near the floor cost 7 ms of sampling in one tick, on top of the
         search's budget.
         """
         room = self.clearance
@@ -1755,14 +1761,18 @@ class Avoider:
             slack = max(room.swept(start + s * d, measured), room.swept(end, pose))
             if gap - slack >= floor:
                 return True
-        least = room._proven_clear(measured, pose, floor)
-        if least is not None:
-            self._line = (measured.copy(), pose.copy(), least)
-            return True
-        gaps = room.path_gaps(measured, pose)
-        clear = _clear_along(gaps, floor)
-        self._line = (measured.copy(), pose.copy(), float(gaps.min())) if clear else None
-        return clear
+        bar, kept = room._line_bound(measured, pose, floor)
+        proven = kept >= bar if bar > 0.0 else np.zeros(len(kept), dtype=bool)
+        least = float(kept[proven].min()) if proven.any() else math.inf
+        if not proven.all():
+            gaps = room._gaps(room.points(room._samples(measured, pose)), np.flatnonzero(~proven))
+            sampled = gaps.min(axis=(-1, -2))
+            if not np.all(sampled[1:] >= bar):
+                self._line = None
+                return False
+            least = min(least, float(sampled.min()))
+        self._line = (measured.copy(), pose.copy(), least)
+        return True
 
     def _far_enough(self, measured: np.ndarray, pose: np.ndarray) -> bool:
         """Whether every link is so far from every obstacle that neither ``pose`` nor the way
@@ -1846,11 +1856,6 @@ def _key(target: np.ndarray | TargetSet) -> tuple[float, ...]:
     if isinstance(target, TargetSet):
         return (*map(float, target.links), *map(float, target.points.ravel()))
     return (float(target[0]), float(target[1]))
-
-
-def _clear_along(gaps: np.ndarray, floor: float) -> bool:
-    """Whether a path with these gaps (start first) keeps the gap :func:`_least_gap` allows."""
-    return bool(np.all(gaps[1:] >= _least_gap(floor, float(gaps[0]))))
 
 
 def _least_gap(floor: float, start: float) -> float:
