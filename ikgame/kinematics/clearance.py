@@ -747,21 +747,23 @@ class Clearance:
         margin clear (the motors do not follow the line exactly, and a link rubbing along an
         obstacle drags). A start already closer than that may only get farther."""
         a, b = np.asarray(a, float), np.asarray(b, float)
-        if len(self.obstacles):
-            bar, kept = self._line_bound(a, b, self.margin / 2.0)
-            if bar > 0.0 and kept.min() >= bar:
-                return True
+        if len(self.obstacles) and self._line_bound(a, b, self.margin / 2.0)[1].all():
+            return True
         return _finish(self._checking(a, b))
 
-    def _line_bound(self, a: np.ndarray, b: np.ndarray, floor: float) -> tuple[float, np.ndarray]:
-        """The least gap (px) the straight line from ``a`` to ``b`` may come to
-        (:func:`_least_gap` of ``floor`` and the start's), and (n,) a gap each link keeps all
-        along it from its gaps at the two ends alone: a link's gap shrinks no faster than its
-        points move (see :meth:`_stepping`), so where a link's bound is at least that least gap
-        (and that is above zero) sampling the line would find the link clear too."""
+    def _line_bound(
+        self, a: np.ndarray, b: np.ndarray, floor: float
+    ) -> tuple[float, np.ndarray, np.ndarray]:
+        """For the straight line from ``a`` to ``b``: the least gap (px) it may come to
+        (:func:`_least_gap` of ``floor`` and the start's), which links it keeps at least that
+        clear for certain ((n,) bool), and the gap (px) each link keeps all along it by the
+        bound, from its gaps at the two ends alone. A link's gap, while above zero, shrinks no
+        faster than its points move (see :meth:`_stepping`), so a link whose bound is above
+        zero and at least the least gap is as clear as sampling the line would find it."""
         ends = self._link_gaps(np.stack((a, b)))
         bar = _least_gap(floor, float(ends[0].min()))
-        return bar, (ends[0] + ends[1] - self.swept_links(a, b)) / 2.0
+        kept = (ends[0] + ends[1] - self.swept_links(a, b)) / 2.0
+        return bar, (kept >= bar) & (kept > 0.0), kept
 
     def _checking(self, a: np.ndarray, b: np.ndarray, keep: float | None = None) -> _Work[bool]:
         """:meth:`path_clear`, ``PATH_CHUNK`` poses a step, stopping at the first chunk that
@@ -1761,8 +1763,7 @@ class Avoider:
             slack = max(room.swept(start + s * d, measured), room.swept(end, pose))
             if gap - slack >= floor:
                 return True
-        bar, kept = room._line_bound(measured, pose, floor)
-        proven = kept >= bar if bar > 0.0 else np.zeros(len(kept), dtype=bool)
+        bar, proven, kept = room._line_bound(measured, pose, floor)
         least = float(kept[proven].min()) if proven.any() else math.inf
         if not proven.all():
             gaps = room._gaps(room.points(room._samples(measured, pose)), np.flatnonzero(~proven))
