@@ -715,7 +715,7 @@ def test_a_straight_line_is_judged_as_its_sampled_poses_judge_it(monkeypatch):
     room = _shelf_room()
     rng = np.random.default_rng(7)
     floor = room.margin / 2.0
-    verdicts = set()
+    verdicts, touching = set(), 0
     for _ in range(200):
         a, b = rng.uniform(-1.5, 1.5, (2, 3))
         # Every link sampled at every pose of the line, the start's gap setting the least.
@@ -725,7 +725,9 @@ def test_a_straight_line_is_judged_as_its_sampled_poses_judge_it(monkeypatch):
         assert Avoider(room)._clear_way(a, b) == sampled
         assert room.path_clear(a, b) == _finish(room._checking(a, b)) == sampled
         verdicts.add(sampled)
+        touching += gaps[0] < 0.0
     assert verdicts == {True, False}
+    assert touching > 10  # lines starting with a link in an obstacle are judged alike too
     # Links whose gaps at both ends outweigh how far they sweep are clear without sampling.
     calls = []
     samples = room._samples
