@@ -719,7 +719,7 @@ def test_a_straight_line_is_judged_as_its_sampled_poses_judge_it(monkeypatch):
     for _ in range(200):
         a, b = rng.uniform(-1.5, 1.5, (2, 3))
         # Every link sampled at every pose of the line, the start's gap setting the least.
-        gaps = room.path_gaps(a, b)
+        gaps = room.smallest_gaps(room._samples(a, b))
         sampled = bool(np.all(gaps[1:] >= _least_gap(floor, float(gaps[0]))))
         # A fresh avoider each time: no line checked before to go by.
         assert Avoider(room)._clear_way(a, b) == sampled
