@@ -38,7 +38,7 @@ from ikgame.kinematics import (
 )
 from ikgame.kinematics.clearance import Avoider
 from ikgame.kinematics.jacobian import jacobian
-from ikgame.kinematics.recovery import holds_along
+from ikgame.kinematics.recovery import STRAINED, holds_along
 
 __all__ = ["Command", "Controller", "joint_error"]
 
@@ -64,14 +64,6 @@ KEPT_STRAIN: Final = 0.5
 """Share of its motors' torque limits past which holding an answer still strains them: such an
 answer, for a still target, is kept while the chain comes in to it (see
 :meth:`Controller._reuse`)."""
-
-TOGETHER_STRAIN: Final = 0.9
-"""Share of its motors' torque limits that holding still at a strained goal must stay within
-for the joints to be brought in together (see :meth:`Controller._strained_way`). Brought in
-together, the light far joints ride the near ones' swing: the last joint of
-`29_five_weak_links`, carried off by it on the way to a goal that asked 0.94, stalled 34 deg
-short and the arm rested 30 px off the target."""
-
 
 def joint_error(desired: np.ndarray, measured: np.ndarray, limited: np.ndarray) -> np.ndarray:
     """Signed angle error per joint, radians.
@@ -382,7 +374,7 @@ class Controller:
         if servo is None:
             rates = np.clip(self.gain * error, -self.max_speed, self.max_speed)
             return Command(solution, rates)
-        if moved:
+        if moved or self._rested_short(solution, error, velocities):
             # The goal may be within the torque budget now: stalled joints try again.
             servo.retry()
         steered = self.avoider is not None and not self.avoider.idle
@@ -400,20 +392,23 @@ class Controller:
 
     def _strained_way(self, solution: Solution, error: np.ndarray) -> bool:
         """True when the chain is far from a goal (some joint more than :data:`NEAR` off) that
-        holding still strains its motors (past :data:`KEPT_STRAIN` of some limit, but within
-        :data:`TOGETHER_STRAIN`), and every pose on the straight line in joint space to it is
-        one the motors can hold (:func:`~ikgame.kinematics.recovery.holds_along`): the servo
-        then brings every joint in together, along that line.
+        holding still strains its motors (past :data:`KEPT_STRAIN` of some limit) but that
+        they can hold (within :data:`~ikgame.kinematics.recovery.STRAINED`), and every pose on
+        the straight line in joint space to it is one the motors can hold
+        (:func:`~ikgame.kinematics.recovery.holds_along`): the servo then brings every joint
+        in together, along that line.
 
         Each joint alone, the light far joints get up to speed sooner and arrive first, and the
         pose on the way, the far joints bent and the near ones not yet, can ask more of a weak
         motor than the goal or any pose on the line does. Seven weakening links hanging
         (`40_seven_weak_links_hanging`) went to such a pose on their way to a goal that asked
         at most 0.76 of any motor: three joints past their limits, they stalled there and the
-        arm hung 65 px off the target. Where the line itself is past the motors (an arm lifted
-        out straight), the far joints folding in first shortens the arm the near ones lift,
-        and the joints are left to come in each at its own pace: brought in together, the five
-        weak links of `29_five_weak_links` stalled lifting their stretched arm.
+        arm hung 65 px off the target; six (`44_six_weak_links_bent_back`), on their way to a
+        goal that asked 0.92 along a line that asked no more, went through poses asking 1.25
+        and collapsed. Where the line itself is past the motors (an arm lifted out straight),
+        the far joints folding in first shortens the arm the near ones lift, and the joints
+        are left to come in each at its own pace: brought in together, the five weak links of
+        `29_five_weak_links` stalled lifting their stretched arm.
         """
         strain = self.solver.strain
         if strain is None or float(np.abs(error).max()) <= NEAR:
@@ -422,9 +417,34 @@ class Controller:
         fresh = self._fresh
         # The solver's own answer, kept: its strain was asked once (see _straining).
         kept = fresh is not None and not fresh.carried and fresh.angles is goal
-        if not KEPT_STRAIN < (self._strain(fresh) if kept else strain(goal)) <= TOGETHER_STRAIN:
+        if not KEPT_STRAIN < (self._strain(fresh) if kept else strain(goal)) <= STRAINED:
             return False
         return holds_along(strain, goal - error, error)
+
+    def _rested_short(self, solution: Solution, error: np.ndarray, velocities: np.ndarray) -> bool:
+        """True when a joint stalled and the chain has come to rest (every joint slower than
+        :data:`SETTLING`) short of a goal the motors can hold (within
+        :data:`~ikgame.kinematics.recovery.STRAINED`), through poses they can hold (every one
+        on the straight line in joint space to it, :func:`~ikgame.kinematics.recovery.holds_along`):
+        the stalled joints then try again.
+
+        A joint stalls when it is carried away from its goal at its torque limit while its
+        load takes over half of it; the stall lasts until the target moves, so that an arm its
+        torque cannot hold comes to rest rather than swing. But the chain's own swing can
+        carry a weak far joint off on the way to a goal the motors hold: brought in together,
+        the last of the five weak links of `29_five_weak_links` was pushed 34 deg back from a
+        goal that asked 0.94 of its motors, stalled, and the arm rested 30 px off the target.
+        At rest that swing has passed, and a goal they can hold along a way they can hold is
+        no load the motors cannot beat.
+        """
+        servo = self.servo
+        strain = self.solver.strain
+        if strain is None or servo is None or not servo.stalled.any():
+            return False
+        if float(np.abs(velocities).max()) > SETTLING:
+            return False
+        goal = solution.angles
+        return strain(goal) <= STRAINED and holds_along(strain, goal - error, error)
 
     def _solve(self, measured: np.ndarray, target: np.ndarray | TargetSet) -> Solution:
         """The solver's answer from the ``measured`` pose, steered clear of obstacles; an
