@@ -11,8 +11,9 @@ This servo instead:
 2. never asks a joint for a velocity change it cannot make in one tick (``a x dt``), and a
    joint at its torque limit toward its goal yet carried away from it (faster and faster, or
    at any speed past a creep when gravity overloads it), with its static load taking at least
-   half its torque that way, asks only to stop until the target moves (anti-windup): it comes
-   to rest where its torque runs out instead of swinging there;
+   half its torque that way, asks only to stop until the target moves or its goal comes to lie
+   the other way (anti-windup): it comes to rest where its torque runs out instead of swinging
+   there;
 3. turns the wanted velocity change into feed-forward torques and pivot forces with the chain's
    dynamics (:func:`~ikgame.control.dynamics.plan_drive`), within the torque limits, so that the
    physics engine's motors only correct what the model missed. Without that, the constraint
@@ -117,7 +118,9 @@ class Servo:
         count = len(self.max_torque)
         # Per joint, as lists: the float path (most chains) reads and writes them every tick;
         # the array path keeps arrays between its ticks instead.
-        self._stalled: list[bool] | np.ndarray = [False] * count
+        # Per joint, the sign of its angle error when it stalled (0 while it has not): a stall
+        # holds for as long as its goal stays on that side.
+        self._stalled: list[float] | np.ndarray = [0.0] * count
         # At its torque limit toward its goal on the last tick. A joint at its limit the other
         # way is being swung away from its goal by its own motor (its share of the whole
         # chain's motion), not held off by a load it cannot beat.
@@ -139,7 +142,7 @@ class Servo:
     def stalled(self) -> np.ndarray:
         """(n,) bool: joints that gave up pushing for their goal at their torque limit (see
         :meth:`retry`)."""
-        return np.array(self._stalled, dtype=bool)
+        return np.array(self._stalled) != 0.0
 
     def strain(self, world_angles: np.ndarray, gravity: tuple[float, float]) -> float:
         """The largest share of a joint's torque limit that holding the chain still at
@@ -166,7 +169,7 @@ class Servo:
     def retry(self) -> None:
         """Let joints that stalled at their torque limit push for their goals again: the target
         moved, or the world changed (gravity), so the goal may be within reach now."""
-        self._stalled = [False] * len(self._stalled)
+        self._stalled = [0.0] * len(self._stalled)
 
     def _remember(self, saturated: list[bool], torques: list[float], errors: list[float]) -> None:
         """Keep this tick's joints at their torque limit toward their goal (the sign of their
@@ -253,8 +256,13 @@ class Servo:
         carried = np.asarray(self._pushing) & (velocities * error < 0.0) & (faster | sagging)
         carried_for = np.where(carried, np.asarray(self._carried) + dt, 0.0)
         loaded = load >= STALL_LOAD * self.max_torque
-        stalled = np.asarray(self._stalled) | ((carried_for >= STALL_TIME) & loaded)
-        self._carried, self._stalled = carried_for, stalled
+        side = np.sign(error)
+        was = np.asarray(self._stalled)
+        sides = np.where(
+            (was != 0.0) & (was == side) | ((carried_for >= STALL_TIME) & loaded), side, 0.0
+        )
+        stalled = sides != 0.0
+        self._carried, self._stalled = carried_for, sides
         self._velocities = np.array(velocities, dtype=float)
         size = np.where(stalled, 0.0, np.abs(error))
         speed = np.minimum(
@@ -363,7 +371,7 @@ class Servo:
         held = hold[0]
         # Each step as in command, with numpy's maximum, minimum and sign written out (the same
         # floats: a sign times a speed is the speed, its negation, zero or NaN).
-        up, down, closing, carried, stalled = [], [], [], [], []
+        up, down, closing, carried, stalled, sides = [], [], [], [], [], []
         floor_share, brake_share, stall_speed = BRAKE_FLOOR, BRAKE_SHARE, STALL_SPEED
         stall_time, stall_load, sqrt = STALL_TIME, STALL_LOAD, math.sqrt
         for lim, e, v, i, h, top, pushing, before, was_carried, was_stalled in zip(
@@ -389,7 +397,8 @@ class Servo:
                 u = d = (lim + abs(h)) / i
             up.append(u)
             down.append(d)
-            load, speed_now = _sign(e) * h, abs(v)
+            side = _sign(e)
+            load, speed_now = side * h, abs(v)
             if (
                 pushing
                 and v * e < 0.0
@@ -402,8 +411,11 @@ class Servo:
             else:
                 was_carried = 0.0
             carried.append(was_carried)
-            is_stalled = was_stalled or (was_carried >= stall_time and load >= stall_load * lim)
+            is_stalled = (was_stalled != 0.0 and was_stalled == side) or (
+                was_carried >= stall_time and load >= stall_load * lim
+            )
             stalled.append(is_stalled)
+            sides.append(side if is_stalled else 0.0)
             size = 0.0 if is_stalled else abs(e)
             by_gain = gain * size
             speed = by_gain if by_gain < top else top
@@ -411,7 +423,7 @@ class Servo:
             speed = by_brake if by_brake < speed else speed
             c = speed if e > 0.0 else -speed if e < 0.0 else 0.0 * speed if e == 0.0 else e
             closing.append(c)
-        self._carried, self._stalled, self._velocities = carried, stalled, now
+        self._carried, self._stalled, self._velocities = carried, sides, now
         if together:
             closing = _together(errors, closing)
         # The sum of the closing speeds, and the time the first joint to stop needs to, at a

@@ -69,7 +69,7 @@ from __future__ import annotations
 import copy
 import math
 from collections import deque
-from collections.abc import Callable, Iterator, Mapping
+from collections.abc import Callable, Generator, Iterator, Mapping
 from dataclasses import dataclass, replace
 from types import MappingProxyType
 from typing import Final
@@ -106,6 +106,9 @@ __all__ = [
     "RELIEF_STEPS",
     "RELIEF_TURN",
     "holds_along",
+    "held_nearest",
+    "HELD_STEPS",
+    "NEAREST_STEPS",
 ]
 
 RESTART_BUDGET: Final = 100
@@ -155,6 +158,14 @@ kept on the target (see ``_relieved``)."""
 
 RELIEF_TURN: Final = 0.05
 """Radians: the most one joint turns in one step of that slide."""
+
+HELD_STEPS: Final = 100
+"""Most steps toward a target the motors cannot hold the end at, from a pose they hold (see
+:func:`held_nearest`)."""
+
+NEAREST_STEPS: Final = 10
+"""Steps of :func:`held_nearest` one call of :meth:`RobustSolver.solve` takes (each about as
+costly as ten of a short chain's solver iterations): the plain answer serves meanwhile."""
 
 JUMPED: Final = 2.0
 """A fresh answer more than this many times as far from the chain (its largest joint turn) as
@@ -391,6 +402,9 @@ class RobustSolver:
                 ),
                 lambda angles: strain(angles) <= HOLDS,
                 lambda angles: holds_along(strain, start, _short_way(skeleton, angles - start)),
+                lambda: _held_nearest_steps(
+                    skeleton, (skeleton.clamp(start), plain.angles), target, strain
+                ),
             )
         if plain.status is SolveStatus.SUCCESS:
             # Arriving from where an unfinished search left the chain is that search's answer.
@@ -668,6 +682,7 @@ class RobustSolver:
         seeds: tuple[_Seeds, _Seeds],
         holds: Callable[[np.ndarray], bool],
         way: Callable[[np.ndarray], bool],
+        nearest: Callable[[], Generator[None, None, np.ndarray | None]],
     ) -> Solution:
         """After a plain solve that arrives in a pose the motors cannot hold: restarts from the
         seeds of a stall, in which only arrivals they can hold (``holds``) count. The first the
@@ -683,7 +698,17 @@ class RobustSolver:
         218 deg, its reaction carrying the sixth back until it stalled); the arm rested
         `blocked` 82 px off. Where no arrival has such a way (an arm lifted out straight), the
         first is served at once all the same: the chain sets off toward it while the search
-        goes on."""
+        goes on.
+
+        Once every seed has failed, the target asks more than the motors have (or lies where
+        no seed found a pose they hold): the pose nearest it that they hold (``nearest()``
+        steps toward it, ``NEAREST_STEPS`` a call, the plain answer serving meanwhile) is the
+        answer, a ``FAILURE`` cached like a target out of reach; where no pose near the chain
+        or the plain answer is one they hold, the plain answer stays. Pushing on for the plain
+        answer, the weak joints stalled one by one where their torque ran out, and the arm
+        sagged, lifted and sagged again as the joints beyond them came in: the five weak links
+        of `29_five_weak_links` moved their end 3 to 4 px in the last half second of the
+        torque-bound target's hold."""
         search = self._search
         if search is None or search.accept is None or not search.aims_at(target, tol):
             search = self._search = _Search(*seeds, target, tol, holds, way)
@@ -702,9 +727,21 @@ class RobustSolver:
             error = _error(self._skeleton, search.fallback, target)
             return Solution(search.fallback, SolveStatus.SUCCESS, iterations, error)
         if search.exhausted:
-            self._unheld = goal
-            self._search = None
-        return replace(plain, iterations=plain.iterations + used)
+            if search.nearest is None:
+                search.nearest = nearest()
+            try:
+                for _ in range(NEAREST_STEPS):
+                    next(search.nearest)
+            except StopIteration as done:
+                self._unheld = goal
+                self._search = None
+                if done.value is not None:
+                    angles = done.value
+                    error = _error(self._skeleton, angles, target)
+                    status = SolveStatus.SUCCESS if error <= tol else SolveStatus.FAILURE
+                    answer = Solution(angles, status, iterations, error)
+                    return self._keep(answer, goal, followed=False)
+        return replace(plain, iterations=iterations)
 
     def _keep(self, solution: Solution, goal: _Goal, followed: bool) -> Solution:
         """Cache ``solution`` (an arrival, or the best there is) and return it read-only."""
@@ -755,6 +792,9 @@ class _Search:
         the motors hold, say); None: every one does."""
         self.fallback: np.ndarray | None = None
         """The first arrival that counts but does not end the search, if any."""
+        self.nearest: Generator[None, None, np.ndarray | None] | None = None
+        """Once every seed has failed, the steps toward the pose nearest the target that
+        counts (see :func:`held_nearest`), under way."""
         self.far = False
         self.best: np.ndarray | None = None
         self.best_far = False
@@ -959,6 +999,152 @@ def _relieved(
         else:
             break
     return pose
+
+
+def held_nearest(
+    skeleton: Skeleton,
+    starts: tuple[np.ndarray, ...],
+    target: np.ndarray,
+    strain: Callable[[np.ndarray], float],
+) -> np.ndarray | None:
+    """The pose nearest ``target`` (px) that the motors hold (``strain`` within ``HOLDS``), as
+    far as steps from each of ``starts`` (radians) find it: the answer for a target the motors
+    cannot hold the end at, as the chain stretched toward it is for one out of reach. None
+    when no start slides down to a pose they hold.
+
+    From each start the pose first slides down the ``strain`` (its steepest way, any joint)
+    until the motors hold it; then damped least-squares steps bring the end toward the target,
+    each kept within ``HOLDS``: a step that would pass it loses the part that raises the
+    strain, and is shortened until it keeps within. The end nearest the target wins.
+
+    >>> arm = Skeleton.chain([100, 100])
+    >>> strain = lambda angles: abs(float(angles[0])) / 0.5  # the base holds up to 0.475 rad
+    >>> pose = held_nearest(arm, (np.zeros(2),), np.array([0.0, 200.0]), strain)
+    >>> bool(strain(pose) <= HOLDS), round(float(pose[0]), 2)
+    (True, 0.47)
+    """
+    steps = _held_nearest_steps(skeleton, starts, target, strain)
+    while True:
+        try:
+            next(steps)
+        except StopIteration as done:
+            return done.value
+
+
+def _held_nearest_steps(
+    skeleton: Skeleton,
+    starts: tuple[np.ndarray, ...],
+    target: np.ndarray,
+    strain: Callable[[np.ndarray], float],
+) -> Generator[None, None, np.ndarray | None]:
+    """:func:`held_nearest` a step at a time, so that a caller can spread the work over
+    calls: the pose is the generator's return value."""
+    best, best_error = None, math.inf
+    for start in starts:
+        held = _down_to_holds(skeleton, skeleton.clamp(np.array(start, dtype=float)), strain)
+        yield None
+        if held is None:
+            continue
+        for pose in _held_toward(skeleton, held, target, strain):
+            held = pose
+            yield None
+        error = _error(skeleton, held, target)
+        if error < best_error:
+            best, best_error = held, error
+    return best
+
+
+def _strain_slope(
+    pose: np.ndarray, strain: Callable[[np.ndarray], float], now: float
+) -> np.ndarray:
+    """The gradient of ``strain`` at ``pose`` (radians), by forward differences."""
+    return np.array([strain(pose + nudge) - now for nudge in 1e-4 * np.eye(len(pose))]) / 1e-4
+
+
+def _down_to_holds(
+    skeleton: Skeleton, pose: np.ndarray, strain: Callable[[np.ndarray], float]
+) -> np.ndarray | None:
+    """``pose`` slid down the steepest way of ``strain`` until within ``HOLDS``, or None when
+    it stops falling first."""
+    now = strain(pose)
+    for _ in range(RELIEF_STEPS):
+        if now <= HOLDS:
+            return pose
+        down = -_strain_slope(pose, strain, now)
+        largest = float(np.abs(down).max())
+        if largest < 1e-12:
+            return None
+        step = down * (RELIEF_TURN / largest)
+        for _ in range(6):
+            trial = skeleton.clamp(pose + step)
+            after = strain(trial)
+            if after < now:
+                pose, now = trial, after
+                break
+            step = step / 2.0
+        else:
+            return None
+    return pose if now <= HOLDS else None
+
+
+def _held_toward(
+    skeleton: Skeleton, pose: np.ndarray, target: np.ndarray, strain: Callable[[np.ndarray], float]
+) -> Iterator[np.ndarray]:
+    """Damped least-squares steps from ``pose`` (held within ``HOLDS``) toward ``target``
+    (px), each kept within ``HOLDS``, until the end comes no nearer: the pose after each."""
+    damping = (0.1 * skeleton.reach) ** 2
+    error = _error(skeleton, pose, target)
+    now = strain(pose)
+    yield pose
+    for _ in range(HELD_STEPS):
+        end = _chain_points(skeleton, pose)[-1]
+        jac = jacobian(skeleton, pose)
+        toward = jac.T @ np.linalg.solve(jac @ jac.T + damping * np.eye(2), target - end)
+        largest = float(np.abs(toward).max())
+        if largest < 1e-9:
+            break
+        step = toward * min(1.0, RELIEF_TURN / largest)
+        moved = _shortened(skeleton, pose, step, target, error, strain)
+        if moved is None:
+            # On the edge of what the motors hold: slide along it, the steepest way down the
+            # error (the Jacobian transpose's) less its part that raises the strain. That
+            # part taken from the least-squares step can leave a step that turns away from
+            # the target.
+            slope = _strain_slope(pose, strain, now)
+            down = jac.T @ (target - end)
+            rise = float(down @ slope)
+            if rise > 0.0:
+                down = down - rise / float(slope @ slope) * slope
+            largest = float(np.abs(down).max())
+            if largest < 1e-12:
+                break
+            moved = _shortened(
+                skeleton, pose, down * (RELIEF_TURN / largest), target, error, strain
+            )
+            if moved is None:
+                break
+        pose, error, now = moved
+        yield pose
+
+
+def _shortened(
+    skeleton: Skeleton,
+    pose: np.ndarray,
+    step: np.ndarray,
+    target: np.ndarray,
+    error: float,
+    strain: Callable[[np.ndarray], float],
+) -> tuple[np.ndarray, float, float] | None:
+    """``pose`` moved by ``step`` (radians), halved up to five times, to the first pose that
+    brings the end nearer ``target`` than ``error`` (px) and that the motors hold (``strain``
+    within ``HOLDS``): that pose, its error and its strain; None if none does."""
+    for _ in range(6):
+        trial = skeleton.clamp(pose + step)
+        after = _error(skeleton, trial, target)
+        if after < error and (held := strain(trial)) <= HOLDS:
+            return trial, after, held
+        step = step / 2.0
+    return None
 
 
 def _far_tree_seeds(skeleton: Skeleton, solve: TargetSolver, fallback: TargetSolver) -> _Seeds:

@@ -28,6 +28,7 @@ from ikgame.kinematics.recovery import (
     RESTART_BUDGET,
     SETTLED,
     STILL_CALLS,
+    held_nearest,
     holds_along,
 )
 
@@ -729,6 +730,49 @@ def test_an_answer_the_motors_can_hold_is_one_the_chain_gets_to_through_poses_th
     assert strain(sol.angles) <= HOLDS
     assert holds_along(strain, pose, sol.angles - pose)
     assert sol.iterations == 0  # found, and followed
+
+
+def _two_link_loads(base: np.ndarray, elbow: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The tip and each joint's static load of two hanging 100 px links of mass 1 in gravity
+    of 1000 px/s^2, for local angles (radians, arrays of any shape)."""
+    a0 = base - PI / 2
+    a1 = a0 + elbow
+    tip = np.stack([100.0 * (np.cos(a0) + np.cos(a1)), 100.0 * (np.sin(a0) + np.sin(a1))])
+    loads = np.stack([1000.0 * (150.0 * np.cos(a0) + 50.0 * np.cos(a1)), 50000.0 * np.cos(a1)])
+    return tip, loads
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_a_target_the_motors_cannot_hold_the_end_at_gets_the_nearest_pose_they_hold(name):
+    # Out to the right, just below the base: held there, the arm asks 1.6 times the base's
+    # torque. Every restart fails; the answer is then the pose nearest the target that the
+    # motors hold, within a pixel of the best of every pose on a 0.25 deg grid, a failure
+    # cached like a target out of reach.
+    arm = Skeleton.chain([100.0, 100.0], limits=[(-2.6, 2.6)] * 2, base_angle=-PI / 2)
+    limits = np.array([1.2e5, 1.0e5])
+
+    def strain(angles: np.ndarray) -> float:
+        return float(np.max(np.abs(_two_link_loads(*angles)[1]) / limits))
+
+    target = np.array([190.0, -30.0])
+    robust = RobustSolver(arm, name)
+    robust.strain = strain
+    pose = np.zeros(2)
+    answers = [robust.solve(pose, target, tolerance=TOLERANCE) for _ in range(80)]
+    sol = answers[-1]
+    assert sol.status is SolveStatus.FAILURE and sol.iterations == 0
+    assert strain(sol.angles) <= HOLDS
+    grid = np.radians(np.arange(-149.0, 149.0, 0.25))
+    tips, loads = _two_link_loads(*np.meshgrid(grid, grid, indexing="ij"))
+    held = np.all(np.abs(loads) <= HOLDS * limits[:, None, None], axis=0)
+    best = np.hypot(*(tips - target[:, None, None]))[held].min()
+    assert best > 30.0  # far from the target: its pose asks too much
+    assert sol.error < best + 1.0
+
+
+def test_the_nearest_pose_the_motors_hold_is_none_when_no_start_slides_to_one():
+    arm = Skeleton.chain([100.0, 100.0])
+    assert held_nearest(arm, (np.zeros(2),), np.array([0.0, 150.0]), lambda a: 2.0) is None
 
 
 def test_an_answer_held_only_at_rest_is_served_at_once_and_followed_when_no_other_is_found():
