@@ -464,8 +464,9 @@ class Controller:
         the stalled joints then try again.
 
         A joint stalls when it is carried away from its goal at its torque limit while its
-        load takes over half of it; the stall lasts until the target moves, so that an arm its
-        torque cannot hold comes to rest rather than swing. But the chain's own swing can
+        load takes over half of it; the stall lasts until the target moves (or the goal comes
+        to lie the other way), so that an arm its torque cannot hold comes to rest rather than
+        swing. But the chain's own swing can
         carry a weak far joint off on the way to a goal the motors hold: brought in together,
         the last of the five weak links of `29_five_weak_links` was pushed 34 deg back from a
         goal that asked 0.94 of its motors, stalled, and the arm rested 30 px off the target.

@@ -51,8 +51,9 @@ target toward one the motors hold), in which only an arrival within ``HOLDS`` co
 one the chain can get to through poses the motors hold (every pose checked on the straight line
 in joint space from the chain's, :func:`holds_along`) is followed like a far seed's answer; the
 first that the motors hold only at rest is served while the search goes on, and followed once
-every seed has been tried. Until one is found the plain answer serves, and once every seed has
-failed it serves for as long as the goal stays.
+every seed has been tried. Until one is found the plain answer serves; once every seed has
+failed, the target asks more than the motors have, and the answer is the pose nearest it that
+they hold (:func:`held_nearest`), a ``FAILURE`` cached as a target out of reach is.
 
 :meth:`RobustSolver.solve_targets` is the same for a tree and a
 :class:`~ikgame.kinematics.targets.TargetSet`, with the multi-target solvers: the cache, the
@@ -688,8 +689,7 @@ class RobustSolver:
         seeds of a stall, in which only arrivals they can hold (``holds``) count. The first the
         chain can get to through poses they hold (``way``) wins and is followed. The first they
         hold only at rest is served while the search goes on, and followed once it has tried
-        every seed; with none, the plain answer serves meanwhile, and for as long as the goal
-        stays once every seed has failed.
+        every seed; with none, the plain answer serves meanwhile.
 
         An answer found so can lie far from the chain in joint space, and the way there matters
         as much as the answer: on `40_seven_weak_links_hanging` FABRIK's first arrival for the
@@ -976,15 +976,24 @@ def _relieved(
     A chain has many poses for one end point and random restarts seldom land on one its weak
     motors can hold (those bend the strong joints near the base and keep the links beyond the
     weak ones near the vertical); the slide goes there from the answer at hand."""
-    pose = skeleton.clamp(np.array(angles, dtype=float))
-    nudges = 1e-4 * np.eye(skeleton.count)
+    return _slid_down(skeleton, skeleton.clamp(np.array(angles, dtype=float)), strain, True)[0]
+
+
+def _slid_down(
+    skeleton: Skeleton, pose: np.ndarray, strain: Callable[[np.ndarray], float], keep_end: bool
+) -> tuple[np.ndarray, float]:
+    """``pose`` (radians, within the limits) slid down the ``strain`` of holding it, its
+    steepest way (along the poses that keep the end where it is, the null space of the end's
+    Jacobian, if ``keep_end``), ``RELIEF_TURN`` at most per joint and step, until it is within
+    ``HOLDS`` or stops falling: the pose and its strain."""
     now = strain(pose)
     for _ in range(RELIEF_STEPS):
         if now <= HOLDS:
             break
-        slope = np.array([strain(pose + nudge) - now for nudge in nudges]) / 1e-4
-        jac = jacobian(skeleton, pose)
-        down = -(slope - np.linalg.pinv(jac) @ (jac @ slope))
+        down = -_strain_slope(pose, strain, now)
+        if keep_end:
+            jac = jacobian(skeleton, pose)
+            down = down - np.linalg.pinv(jac) @ (jac @ down)
         largest = float(np.abs(down).max())
         if largest < 1e-12:
             break
@@ -998,7 +1007,7 @@ def _relieved(
             step = step / 2.0
         else:
             break
-    return pose
+    return pose, now
 
 
 def held_nearest(
@@ -1014,8 +1023,9 @@ def held_nearest(
 
     From each start the pose first slides down the ``strain`` (its steepest way, any joint)
     until the motors hold it; then damped least-squares steps bring the end toward the target,
-    each kept within ``HOLDS``: a step that would pass it loses the part that raises the
-    strain, and is shortened until it keeps within. The end nearest the target wins.
+    each shortened until it keeps within ``HOLDS``. On the edge, the steepest way down the
+    error less its part that raises the strain slides along it. The end nearest the target
+    wins.
 
     >>> arm = Skeleton.chain([100, 100])
     >>> strain = lambda angles: abs(float(angles[0])) / 0.5  # the base holds up to 0.475 rad
@@ -1041,9 +1051,11 @@ def _held_nearest_steps(
     calls: the pose is the generator's return value."""
     best, best_error = None, math.inf
     for start in starts:
-        held = _down_to_holds(skeleton, skeleton.clamp(np.array(start, dtype=float)), strain)
+        held, now = _slid_down(
+            skeleton, skeleton.clamp(np.array(start, dtype=float)), strain, False
+        )
         yield None
-        if held is None:
+        if now > HOLDS:
             continue
         for pose in _held_toward(skeleton, held, target, strain):
             held = pose
@@ -1059,32 +1071,6 @@ def _strain_slope(
 ) -> np.ndarray:
     """The gradient of ``strain`` at ``pose`` (radians), by forward differences."""
     return np.array([strain(pose + nudge) - now for nudge in 1e-4 * np.eye(len(pose))]) / 1e-4
-
-
-def _down_to_holds(
-    skeleton: Skeleton, pose: np.ndarray, strain: Callable[[np.ndarray], float]
-) -> np.ndarray | None:
-    """``pose`` slid down the steepest way of ``strain`` until within ``HOLDS``, or None when
-    it stops falling first."""
-    now = strain(pose)
-    for _ in range(RELIEF_STEPS):
-        if now <= HOLDS:
-            return pose
-        down = -_strain_slope(pose, strain, now)
-        largest = float(np.abs(down).max())
-        if largest < 1e-12:
-            return None
-        step = down * (RELIEF_TURN / largest)
-        for _ in range(6):
-            trial = skeleton.clamp(pose + step)
-            after = strain(trial)
-            if after < now:
-                pose, now = trial, after
-                break
-            step = step / 2.0
-        else:
-            return None
-    return pose if now <= HOLDS else None
 
 
 def _held_toward(
