@@ -246,16 +246,9 @@ def test_weakening_links_far_from_a_strained_goal_come_in_together_and_hold_it(s
     # first, and the pose on the way (far joints bent, near ones not yet) asked up to 1.33 of
     # the weak motors' torque: they stalled there, the arm hung 65 px off the target (DLS) or
     # swung about it (CCD).
-    sim = _stress_simulation("40_seven_weak_links_hanging", solver)
-    tips = []
-    while sim.script.step_index == 0:
-        sim.step()
-        tips.append(sim.world.effector_positions()[0].copy())
     # Reached within the 5 s timeout and held for the step's 1 s, at rest.
-    assert len(tips) * sim.dt < 4.0
-    last = np.array(tips[-round(0.5 / sim.dt) :])
+    last = _first_step_rest(_stress_simulation("40_seven_weak_links_hanging", solver), 4.0)
     assert np.hypot(*(last[-1] - [100.0, -330.0])) < 3.0
-    assert np.ptp(last, axis=0).max() < 0.5
 
 
 @pytest.mark.parametrize("solver", ["jacobian_transpose", "fabrik"])
@@ -265,14 +258,8 @@ def test_a_goal_the_motors_hold_only_just_is_come_in_to_together(solver):
     # light far joints arrived first, the pose on the way asked up to 1.25, and the arm
     # collapsed and was held blocked 130 to 350 px off.
     sim = _stress_simulation("44_six_weak_links_bent_back", solver)
-    tips = []
-    while sim.script.step_index == 0:
-        sim.step()
-        tips.append(sim.world.effector_positions()[0].copy())
-    assert len(tips) * sim.dt < 3.0
-    last = np.array(tips[-round(0.5 / sim.dt) :])
+    last = _first_step_rest(sim, 3.0)
     assert np.hypot(*(last[-1] - [-200.0, -240.0])) < 1.0
-    assert np.ptp(last, axis=0).max() < 0.5
     assert sim.last_tick.solver_status == "success"
 
 
@@ -360,6 +347,19 @@ def test_ik_rate_must_be_positive_or_none():
     with pytest.raises(ValueError, match="ik_rate"):
         Controller(skeleton, "ccd", max_speed=np.ones(1), ik_rate=0.0)
     assert Controller(skeleton, "ccd", max_speed=np.ones(1), ik_rate=None).ik_rate is None
+
+
+def _first_step_rest(sim, within: float) -> np.ndarray:
+    """The end effector's places (px) over the last 0.5 s of the script's first step, run
+    out: checked to end within ``within`` s, and to be at rest (a spread under 0.5 px)."""
+    tips = []
+    while sim.script.step_index == 0:
+        sim.step()
+        tips.append(sim.world.effector_positions()[0].copy())
+    assert len(tips) * sim.dt < within
+    last = np.array(tips[-round(0.5 / sim.dt) :])
+    assert np.ptp(last, axis=0).max() < 0.5
+    return last
 
 
 def _stress_simulation(name: str, solver: str):

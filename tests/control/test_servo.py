@@ -1,6 +1,7 @@
 """The servo in the physics world: long chains settle, saturated arms rest, stretched arms brake."""
 
 import math
+from collections.abc import Callable
 
 import numpy as np
 import pytest
@@ -8,7 +9,7 @@ import pytest
 from ikgame.control import _floats, dynamics
 from ikgame.control._floats import FloatInertia
 from ikgame.control.dynamics import ChainInertia, Pose
-from ikgame.control.servo import BRAKE_FLOOR, Servo
+from ikgame.control.servo import BRAKE_FLOOR, Servo, ServoCommand
 from ikgame.kinematics import forward_kinematics
 from ikgame.level.model import Level
 from ikgame.physics.world import build_skeleton
@@ -220,21 +221,31 @@ def test_a_joint_the_chain_s_motion_carries_off_does_not_stall(floats):
     assert servo.stalled.tolist() == [False, False]
 
 
-@pytest.mark.parametrize("floats", [True, False], ids=["floats", "numpy"])
-def test_a_joint_gravity_overloads_stalls_while_it_sags_at_a_steady_speed(floats):
-    # Held out level, the link needs 2e4 against gravity and its motor has 1.5e4: it pushes
-    # for its goal above at its limit and sags at a steady 0.1 rad/s. A stall once needed the
-    # joint to be carried off faster and faster, so it never stalled and, at its limit, went
-    # on setting the chain's one acceleration factor: the arms of 29_five_weak_links swung.
+def _sagging_link(floats: bool) -> tuple[Servo, Callable[[float], ServoCommand]]:
+    """One link held out level, needing 2e4 against gravity where its motor has 1.5e4, and
+    sagging at a steady 0.1 rad/s: its servo, and a tick of it for an angle error (rad)."""
     one = ChainInertia(np.array([40.0]), np.array([1.0]), np.array([1600.0 / 12.0]))
     servo = Servo(one, max_torque=np.array([1.5e4]), max_speed=np.array([3.0]), gain=12.0)
     if not floats:
         servo._floats = None  # the numpy path, as chains longer than FLOAT_LINKS take
-    for _ in range(40):  # 0.17 s, past STALL_TIME
-        command = servo.command(
-            np.array([0.5]), np.zeros(1), np.array([-0.1]), (0.0, -1000.0), 1 / 240
+
+    def tick(error: float) -> ServoCommand:
+        return servo.command(
+            np.array([error]), np.zeros(1), np.array([-0.1]), (0.0, -1000.0), 1 / 240
         )
-        assert command.torques[0] == pytest.approx(1.5e4)
+
+    return servo, tick
+
+
+@pytest.mark.parametrize("floats", [True, False], ids=["floats", "numpy"])
+def test_a_joint_gravity_overloads_stalls_while_it_sags_at_a_steady_speed(floats):
+    # Held out level, the link pushes for its goal above at its limit and sags at a steady
+    # 0.1 rad/s. A stall once needed the joint to be carried off faster and faster, so it
+    # never stalled and, at its limit, went on setting the chain's one acceleration factor:
+    # the arms of 29_five_weak_links swung.
+    servo, tick = _sagging_link(floats)
+    for _ in range(40):  # 0.17 s, past STALL_TIME
+        assert tick(0.5).torques[0] == pytest.approx(1.5e4)
     assert servo.stalled.tolist() == [True]
 
 
@@ -243,18 +254,11 @@ def test_a_stall_ends_when_the_goal_comes_to_lie_the_other_way(floats):
     # Stalled pushing up for a goal above, the link is given a goal below (a new answer for
     # the same target): gravity now helps it there. Kept stalled, a joint of five weak links
     # did not fold toward a new answer and the base lifted the arm unfolded, until it fell.
-    one = ChainInertia(np.array([40.0]), np.array([1.0]), np.array([1600.0 / 12.0]))
-    servo = Servo(one, max_torque=np.array([1.5e4]), max_speed=np.array([3.0]), gain=12.0)
-    if not floats:
-        servo._floats = None  # the numpy path, as chains longer than FLOAT_LINKS take
-    for _ in range(40):
-        servo.command(np.array([0.5]), np.zeros(1), np.array([-0.1]), (0.0, -1000.0), 1 / 240)
-    assert servo.stalled.tolist() == [True]
-    servo.command(np.array([0.5]), np.zeros(1), np.array([-0.1]), (0.0, -1000.0), 1 / 240)
+    servo, tick = _sagging_link(floats)
+    for _ in range(41):
+        tick(0.5)
     assert servo.stalled.tolist() == [True]  # the goal still above
-    command = servo.command(
-        np.array([-0.5]), np.zeros(1), np.array([-0.1]), (0.0, -1000.0), 1 / 240
-    )
+    command = tick(-0.5)
     assert servo.stalled.tolist() == [False]
     assert command.rates[0] < -0.1  # heading for it
 
