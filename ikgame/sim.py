@@ -57,7 +57,9 @@ class TickInfo:
         tick: ticks done, including this one.
         time: simulated time at the end of the tick, s.
         solver_status: ``"success"``, ``"processing"`` or ``"failure"`` (the CCD article's
-            states), or ``"blocked"``: the solver reaches the target but the chain, pushing
+            states; ``"failure"`` also for a target the motors cannot hold the end at, the
+            chain resting in the pose nearest it that they hold), or ``"blocked"``: the solver
+            reaches the target but the chain, pushing
             against something or at its torque limits, makes no progress toward it, so it holds
             its pose until the target moves (see :mod:`ikgame.control.blockage`).
         iterations: solver iterations used this tick.
