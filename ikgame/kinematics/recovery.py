@@ -769,7 +769,11 @@ class RobustSolver:
         return solution
 
 
-_Seeds = Iterator[tuple[np.ndarray, tuple[Solver | TargetSolver, ...]]]
+_Start = np.ndarray | Generator[int, None, np.ndarray]
+"""A restart's start pose, or steps that work it out (yielding how many times each asked the
+strain, which a search counts as iterations) and return it."""
+
+_Seeds = Iterator[tuple[_Start, tuple[Solver | TargetSolver, ...]]]
 """Start poses, each with the solvers to run from it one after the other."""
 
 
@@ -809,7 +813,7 @@ class _Search:
         self._best_score = math.inf
         # Each entry: a start pose, the solvers still to run from it one after the other, and
         # whether it is a far seed.
-        self._queue: deque[tuple[np.ndarray, tuple[Solver | TargetSolver, ...], bool]] = deque()
+        self._queue: deque[tuple[_Start, tuple[Solver | TargetSolver, ...], bool]] = deque()
         self._near: _Seeds | None = near
         self._far: _Seeds | None = far
 
@@ -854,6 +858,15 @@ class _Search:
             if entry is None:
                 break
             angles, solvers, far = entry
+            if not isinstance(angles, np.ndarray):
+                # A start still being worked out: a step of it, then the rest later.
+                try:
+                    used += next(angles)
+                except StopIteration as done:
+                    angles = done.value
+                else:
+                    self._queue.appendleft((angles, solvers, far))
+                    continue
             for index, solver in enumerate(solvers):
                 allowed = min(SEED_ITERATIONS, budget - used)
                 if allowed < 1:
@@ -884,7 +897,7 @@ class _Search:
                 angles = sol.angles
         return used
 
-    def _next(self) -> tuple[np.ndarray, tuple[Solver | TargetSolver, ...], bool] | None:
+    def _next(self) -> tuple[_Start, tuple[Solver | TargetSolver, ...], bool] | None:
         if self._queue:
             return self._queue.popleft()
         if self._near is not None:
@@ -974,7 +987,7 @@ def _far_held_seeds(
 
 def _relieved(
     skeleton: Skeleton, angles: np.ndarray, strain: Callable[[np.ndarray], float]
-) -> np.ndarray:
+) -> Generator[int, None, np.ndarray]:
     """``angles`` slid along the poses that keep the end where it is (the null space of the
     end's Jacobian) down the ``strain`` of holding them, until it is within ``HOLDS`` or stops
     falling: the arm's own answer, rearranged so the motors can hold it. The slide leaves the
@@ -982,9 +995,13 @@ def _relieved(
 
     A chain has many poses for one end point and random restarts seldom land on one its weak
     motors can hold (those bend the strong joints near the base and keep the links beyond the
-    weak ones near the vertical); the slide goes there from the answer at hand."""
-    pose = skeleton.clamp(np.array(angles, dtype=float))
-    return _run_out(_slid_down(skeleton, pose, strain, True))[0]
+    weak ones near the vertical); the slide goes there from the answer at hand. A step at a
+    time, each yielding how many times it asked the ``strain``: on thirty links the whole
+    slide took 20 ms, more than a frame, in the one call of the search that came to it."""
+    counted, asked = _counting(strain)
+    start = skeleton.clamp(np.array(angles, dtype=float))
+    pose, _ = yield from _asking(_slid_down(skeleton, start, counted, True), asked)
+    return pose
 
 
 def _run_out(steps: Generator[object, None, _Out]) -> _Out:
@@ -1063,12 +1080,7 @@ def _held_nearest_steps(
     """:func:`held_nearest` a step at a time, so that a caller can spread the work over
     calls: each step yields how many times it asked the ``strain``, and the pose is the
     generator's return value."""
-    asked = [0]
-
-    def counted(angles: np.ndarray) -> float:
-        asked[0] += 1
-        return strain(angles)
-
+    counted, asked = _counting(strain)
     best, best_error = None, math.inf
     for start in starts:
         pose = skeleton.clamp(np.array(start, dtype=float))
@@ -1080,6 +1092,19 @@ def _held_nearest_steps(
         if error < best_error:
             best, best_error = held, error
     return best
+
+
+def _counting(
+    strain: Callable[[np.ndarray], float],
+) -> tuple[Callable[[np.ndarray], float], list[int]]:
+    """``strain``, and a one-item list that counts how many times it is asked."""
+    asked = [0]
+
+    def counted(angles: np.ndarray) -> float:
+        asked[0] += 1
+        return strain(angles)
+
+    return counted, asked
 
 
 def _asking(steps: Generator[None, None, _Out], asked: list[int]) -> Generator[int, None, _Out]:

@@ -770,6 +770,31 @@ def test_a_target_the_motors_cannot_hold_the_end_at_gets_the_nearest_pose_they_h
     assert sol.error < best + 1.0
 
 
+def test_the_slides_of_a_search_for_a_held_pose_are_spread_over_calls():
+    # Thirty links whose base cannot hold them reaching out: the search slides the answer
+    # along the poses that keep its end, then steps toward the nearest pose the motors hold,
+    # each slide step asking the strain once per joint and more. All in the calls that came
+    # to them, one call asked it 726 times (about 20 ms on this chain); spread, no call asks
+    # more than a budget's worth and a step.
+    arm = Skeleton.chain([10.0] * 30, limits=[(-2.6, 2.6)] * 30, base_angle=-PI / 2)
+    strain = _hanging_strain(arm, np.array([3.0e5] + [1.0e9] * 29), 0.1, 1000.0)
+    asked = [0]
+
+    def counted(angles: np.ndarray) -> float:
+        asked[0] += 1
+        return strain(angles)
+
+    robust = RobustSolver(arm, "dls")
+    robust.strain = counted
+    most = 0
+    for _ in range(150):
+        before = asked[0]
+        sol = robust.solve(np.zeros(30), np.array([280.0, -40.0]), tolerance=TOLERANCE)
+        most = max(most, asked[0] - before)
+    assert sol.status is SolveStatus.FAILURE and strain(sol.angles) <= HOLDS
+    assert most < 300
+
+
 def test_the_nearest_pose_the_motors_hold_is_none_when_no_start_slides_to_one():
     arm = Skeleton.chain([100.0, 100.0])
     assert held_nearest(arm, (np.zeros(2),), np.array([0.0, 150.0]), lambda a: 2.0) is None
