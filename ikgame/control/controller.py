@@ -388,14 +388,15 @@ class Controller:
             goal_rates,
             steered=steered,
             together=not steered
-            and (self._weightless_way(error) or self._strained_way(solution, error)),
+            and float(np.abs(error).max()) > NEAR
+            and (self._weightless_way() or self._strained_way(solution, error)),
         )
         return Command(solution, drive.rates, drive)
 
-    def _weightless_way(self, error: np.ndarray) -> bool:
+    def _weightless_way(self) -> bool:
         """True for a chain of up to :data:`~ikgame.control.servo.SECTION_LINKS` links without
-        gravity that is far from its goal (some joint more than :data:`NEAR` off): the servo
-        then brings every joint in together, along the straight line in joint space.
+        gravity: far from its goal (some joint more than :data:`NEAR` off), the servo then
+        brings every joint in together, along the straight line in joint space.
 
         Without gravity every pose holds with no torque, so nothing on the way asks the far
         joints to fold in first (under gravity that shortens an arm the near joints lift: see
@@ -422,14 +423,13 @@ class Controller:
             and not any(self._gravity)
             and self.skeleton.is_chain
             and self.skeleton.count <= SECTION_LINKS
-            and float(np.abs(error).max()) > NEAR
         )
 
     def _strained_way(self, solution: Solution, error: np.ndarray) -> bool:
-        """True when the chain is far from a goal (some joint more than :data:`NEAR` off) that
-        holding still strains its motors (past :data:`KEPT_STRAIN` of some limit) but that
-        they can hold (within :data:`~ikgame.kinematics.recovery.STRAINED`), and every pose on
-        the straight line in joint space to it is one the motors can hold
+        """True, for a chain far from its goal (some joint more than :data:`NEAR` off), when
+        holding that goal still strains its motors (past :data:`KEPT_STRAIN` of some limit)
+        but they can hold it (within :data:`~ikgame.kinematics.recovery.STRAINED`), and every
+        pose on the straight line in joint space to it is one the motors can hold
         (:func:`~ikgame.kinematics.recovery.holds_along`): the servo then brings every joint
         in together, along that line.
 
@@ -446,7 +446,7 @@ class Controller:
         `29_five_weak_links` stalled lifting their stretched arm.
         """
         strain = self.solver.strain
-        if strain is None or float(np.abs(error).max()) <= NEAR:
+        if strain is None:
             return False
         goal = solution.angles
         fresh = self._fresh
