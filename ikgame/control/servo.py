@@ -174,6 +174,10 @@ class Servo:
     def _remember(self, saturated: list[bool], torques: list[float], errors: list[float]) -> None:
         """Keep this tick's joints at their torque limit toward their goal (the sign of their
         angle ``errors``, radians), and which were pushing (see ``_pushing``)."""
+        if not any(saturated):
+            # Most ticks: none is at its limit, and those pushing are those straining before.
+            self._pushing, self._straining = self._straining, [False] * len(saturated)
+            return
         toward = [
             at_limit and torque * error > 0.0
             for at_limit, torque, error in zip(saturated, torques, errors, strict=True)
@@ -305,7 +309,7 @@ class Servo:
         def alone(k: int) -> JointLoads:
             return pose.loads(alpha=along((joints == k).astype(float)))
 
-        # _weak over arrays: the same comparisons.
+        # The joints that give way at their torque limit (see the float path's weak_joints).
         weak = (stalled | ~(np.abs(hold.torques) <= self.max_torque), alone)
 
         def turning(accelerations: np.ndarray) -> JointLoads:
@@ -371,7 +375,7 @@ class Servo:
         held = hold[0]
         # Each step as in command, with numpy's maximum, minimum and sign written out (the same
         # floats: a sign times a speed is the speed, its negation, zero or NaN).
-        up, down, closing, carried, stalled, sides = [], [], [], [], [], []
+        up, down, closing, carried, sides, weak_joints = [], [], [], [], [], []
         floor_share, brake_share, stall_speed = BRAKE_FLOOR, BRAKE_SHARE, STALL_SPEED
         stall_time, stall_load, sqrt = STALL_TIME, STALL_LOAD, math.sqrt
         for lim, e, v, i, h, top, pushing, before, was_carried, was_stalled in zip(
@@ -393,11 +397,12 @@ class Servo:
             against = d if e > 0.0 else u
             floor = floor_share * lim / i
             brake = brake_share * (floor if floor > against else against)
-            if not abs(h) <= lim:
+            overloaded = not abs(h) <= lim
+            if overloaded:
                 u = d = (lim + abs(h)) / i
             up.append(u)
             down.append(d)
-            side = _sign(e)
+            side = 1.0 if e > 0.0 else -1.0 if e < 0.0 else 0.0 if e == 0.0 else e  # _sign(e)
             load, speed_now = side * h, abs(v)
             if (
                 pushing
@@ -414,7 +419,9 @@ class Servo:
             is_stalled = (was_stalled != 0.0 and was_stalled == side) or (
                 was_carried >= stall_time and load >= stall_load * lim
             )
-            stalled.append(is_stalled)
+            # Those that gave their goal up, and those whose static load is past their limit,
+            # give way at it rather than set the chain's one factor (see give_way).
+            weak_joints.append(is_stalled or overloaded)
             sides.append(side if is_stalled else 0.0)
             size = 0.0 if is_stalled else abs(e)
             by_gain = gain * size
@@ -437,15 +444,16 @@ class Servo:
                 stop_in = stop if stop < stop_in else stop_in
         # The loads of braking and of spinning are evaluated only when a bound on them (see
         # _Quiet) leaves any joint short of room: otherwise their factor is 1, exactly.
-        quiet = self._quiet
+        quiet, factor = self._quiet, 1.0
         if stop_in != math.inf and not quiet.brakes(closing_total / stop_in):
             halt = pose.turning([-c / stop_in for c in closing])[0]
             factor = _fit_floats(halt, held, limits, BRAKE_SHARE)
-            closing = [c * factor for c in closing]
-        if goal_rates is not None:
-            closing = [c + g for c, g in zip(closing, goal_rates.tolist(), strict=True)]
+        # Times 1.0 and plus -0.0 change no float: without a factor or goal rates, each closing
+        # speed is clipped as it is.
+        goals = [-0.0] * len(closing) if goal_rates is None else goal_rates.tolist()
         target, target_total = [], 0.0
-        for t, s in zip(closing, speeds, strict=True):
+        for c, g, s in zip(closing, goals, speeds, strict=True):
+            t = c * factor + g
             t = -s if -s > t else t
             t = s if s < t else t
             target.append(t)
@@ -472,7 +480,7 @@ class Servo:
         def alone(k: int) -> Loads:
             return pose.turning([1.0 if j == k else 0.0 for j in range(count)])
 
-        weak = (_weak(stalled, held, limits), alone)
+        weak = (weak_joints, alone)
         easing = None if steered else pose.turning
         reached, loads, saturated, consistent = fit_floats(
             coasting, push, accelerations, limits, head, weak, easing
@@ -492,7 +500,8 @@ class Servo:
             carried = _overrun(
                 tree.parents, saturated, torques, now, errors, hard, push[0], held, limits, gain
             )
-            budgets = [0.0 if c else b for c, b in zip(carried, budgets, strict=True)]
+            if any(carried):
+                budgets = [0.0 if c else b for c, b in zip(carried, budgets, strict=True)]
         return ServoCommand(
             rates=np.array([v + a * dt for v, a in zip(now, reached, strict=True)]),
             torques=np.array(torques),
@@ -563,13 +572,6 @@ class _Quiet:
         return total <= self._brake
 
 
-def _weak(stalled: list[bool], held: list[float], limits: list[float]) -> list[bool]:
-    """Joints that give way at their torque limit rather than set the chain's one factor (see
-    :func:`~ikgame.control.dynamics.give_way`): those that gave their goal up, and those whose
-    static load (``held``, gravity at the pose) is past their limit."""
-    return [s or not abs(h) <= lim for s, h, lim in zip(stalled, held, limits, strict=True)]
-
-
 def _overrun(
     parents: list[int],
     saturated: list[bool],
@@ -595,6 +597,9 @@ def _overrun(
     more needs its correction against the sag. Torques are in mass px^2/s^2, rates rad/s,
     angles radians; ``gain`` is the servo's, /s.
     """
+    if not any(saturated):
+        # A carried joint is at its limit: most ticks none is.
+        return [False] * len(parents)
     light = [abs(h) < STALL_LOAD * lim for h, lim in zip(held, limits, strict=True)]
     for j in range(len(parents) - 1, -1, -1):
         if parents[j] >= 0 and not light[j]:
