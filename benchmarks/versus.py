@@ -28,14 +28,13 @@ LINKS = 10
 
 # Runs in each tree's own interpreter process, with that tree first on the path: the chain is
 # validated by that tree's level model. Prints one JSON line: the mean CPU us per tick.
-_CHILD = (
-    """
+_CHILD = """
 import json, sys, time
 sys.path[:0] = [sys.argv[1], sys.argv[2]]
 from chains import chain_level
 from ikgame.sim import Simulation
 target, warm_up, ticks, batch = sys.argv[3], int(sys.argv[4]), int(sys.argv[5]), 400
-sim = Simulation(chain_level(%d, target), record=False)
+sim = Simulation(chain_level(int(sys.argv[7]), target), record=False)
 for _ in range(warm_up):
     sim.step()
 if sys.argv[6] == "count":
@@ -50,8 +49,6 @@ for _ in range(max(1, ticks // batch)):
     times.append((time.process_time() - start) / batch)
 print(json.dumps({"mean_us": sum(times) / len(times) * 1e6}))
 """
-    % LINKS
-)  # noqa: UP031 - a format string in a string of code reads better than braces doubled
 
 
 def _command(tree: Path, target: str, warm_up: int, ticks: int, mode: str) -> list[str]:
@@ -66,6 +63,7 @@ def _command(tree: Path, target: str, warm_up: int, ticks: int, mode: str) -> li
         str(warm_up),
         str(ticks),
         mode,
+        str(LINKS),
     ]
 
 
