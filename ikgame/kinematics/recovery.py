@@ -164,6 +164,10 @@ HELD_STEPS: Final = 100
 """Most steps toward a target the motors cannot hold the end at, from a pose they hold (see
 :func:`held_nearest`)."""
 
+SPENT: Final = 0.9
+"""Share of some motor's torque limit that holding the chain where it is takes, past which a
+solve looks for an answer whose way the motors hold (see :meth:`RobustSolver.solve`)."""
+
 NEAREST_STRAINS: Final = 100
 """How many times one call of :meth:`RobustSolver.solve` asks the strain of poses on the way
 to :func:`held_nearest`'s at most, but for the step that passes it (a step asks it once per
@@ -337,6 +341,8 @@ class RobustSolver:
         self._pending: _Goal | None = None
         self._waiting = 0
         self._unheld: _Goal | None = None
+        # The target whose search for an answer with a way the motors hold found none.
+        self._way_searched: _Goal | None = None
         # The cached plain answer and how far the chain was from it at the last call.
         self._approach: tuple[_Answer, float] | None = None
 
@@ -412,6 +418,39 @@ class RobustSolver:
                     skeleton, (skeleton.clamp(start), plain.angles), target, strain
                 ),
             )
+        if (
+            plain.status is not SolveStatus.FAILURE
+            and strain is not None
+            and goal != self._way_searched
+            and self._waiting >= STILL_CALLS
+            and strain(start) > SPENT
+            and not holds_along(strain, start, _short_way(skeleton, plain.angles - start), HOLDS)
+        ):
+            # An answer the motors hold at rest but not on the way to it with the margin they
+            # rest with (HOLDS): from the pose where a torque-bound target left
+            # `46_heavy_weak_second_branch` (its base at 0.95 of its limit), CCD's and FABRIK's
+            # answer swung the elbow out (0.93 at rest, up to 1.03 on the way), and the elbow,
+            # its braking taking torque the base did not have, passed its goal by 30 deg. An
+            # answer whose way the motors hold so is searched for; with none (an arm lifted
+            # from a stretched rest, where no straight way holds), the plain answer it is.
+            held = self._held_way(
+                plain,
+                goal,
+                target,
+                tol,
+                (
+                    _near_seeds(skeleton, self._solve, skeleton.clamp(start), plain.angles),
+                    _far_held_seeds(
+                        skeleton, self._solve, self._fallback, plain.angles, target, strain
+                    ),
+                ),
+                lambda angles: strain(angles) <= HOLDS,
+                lambda angles: holds_along(
+                    strain, start, _short_way(skeleton, angles - start), HOLDS
+                ),
+            )
+            if held is not None:
+                return held
         if plain.status is SolveStatus.SUCCESS:
             # Arriving from where an unfinished search left the chain is that search's answer.
             search = self._search
@@ -715,12 +754,7 @@ class RobustSolver:
         sagged, lifted and sagged again as the joints beyond them came in: the five weak links
         of `29_five_weak_links` moved their end 3 to 4 px in the last half second of the
         torque-bound target's hold."""
-        search = self._search
-        if search is None or search.accept is None or not search.aims_at(target, tol):
-            search = self._search = _Search(*seeds, target, tol, holds, way)
-        search.far = True
-        used = search.run(self._skeleton, target, tol, self.budget)
-        iterations = plain.iterations + used
+        search, iterations = self._searched(plain, target, tol, seeds, holds, way)
         found = search.best if search.arrived else None
         if found is None and search.exhausted:
             found = search.fallback
@@ -749,6 +783,50 @@ class RobustSolver:
                     answer = Solution(angles, status, iterations, error)
                     return self._keep(answer, goal, followed=False)
         return replace(plain, iterations=iterations)
+
+    def _searched(
+        self,
+        plain: Solution,
+        target: np.ndarray,
+        tol: float,
+        seeds: tuple[_Seeds, _Seeds],
+        holds: Callable[[np.ndarray], bool],
+        way: Callable[[np.ndarray], bool],
+    ) -> tuple[_Search, int]:
+        """The search for arrivals the motors hold (``holds``), through poses they hold
+        (``way``), taken on by this call's budget; and the iterations of ``plain`` and of it."""
+        search = self._search
+        if search is None or search.accept is None or not search.aims_at(target, tol):
+            search = self._search = _Search(*seeds, target, tol, holds, way)
+        search.far = True
+        used = search.run(self._skeleton, target, tol, self.budget)
+        return search, plain.iterations + used
+
+    def _held_way(
+        self,
+        plain: Solution,
+        goal: tuple[float, float],
+        target: np.ndarray,
+        tol: float,
+        seeds: tuple[_Seeds, _Seeds],
+        holds: Callable[[np.ndarray], bool],
+        way: Callable[[np.ndarray], bool],
+    ) -> Solution | None:
+        """After a plain solve whose answer the motors hold (or one on its way) but not the
+        way to it: restarts from the seeds of a stall, in which only an arrival they hold
+        (``holds``) through poses they hold (``way``) counts, and replaces the plain answer.
+        The plain answer serves while the search goes on; once it has tried every seed, None
+        (the plain answer is taken as any other)."""
+        search, iterations = self._searched(plain, target, tol, seeds, holds, way)
+        if search.arrived:
+            error = _error(self._skeleton, search.best, target)
+            answer = Solution(search.best, SolveStatus.SUCCESS, iterations, error)
+            return self._keep(answer, goal, followed=True)
+        if not search.exhausted:
+            return replace(plain, iterations=iterations)
+        self._way_searched = goal
+        self._search = None
+        return None
 
     def _keep(self, solution: Solution, goal: _Goal, followed: bool) -> Solution:
         """Cache ``solution`` (an arrival, or the best there is) and return it read-only."""
@@ -940,11 +1018,16 @@ def _near_seeds(
     yield _backed_off(skeleton, stalled), (dls,)
 
 
-def holds_along(strain: Callable[[np.ndarray], float], start: np.ndarray, way: np.ndarray) -> bool:
+def holds_along(
+    strain: Callable[[np.ndarray], float],
+    start: np.ndarray,
+    way: np.ndarray,
+    most: float = STRAINED,
+) -> bool:
     """Whether the motors can hold every pose checked (at ``WAY_STEPS``) on the straight line
     in joint space from ``start`` to ``start + way`` (radians): ``strain`` (what holding a pose
-    still takes of them, as :attr:`RobustSolver.strain`) within ``STRAINED`` at each. Neither
-    end is checked.
+    still takes of them, as :attr:`RobustSolver.strain`) within ``most`` at each. Neither end
+    is checked.
 
     A chain whose joints come in together keeps to that line; one whose joints come in each at
     its own pace passes near it.
@@ -955,7 +1038,7 @@ def holds_along(strain: Callable[[np.ndarray], float], start: np.ndarray, way: n
     >>> holds_along(strain, np.zeros(2), np.array([0.5, 2.0]))
     False
     """
-    return all(strain(start + step * way) <= STRAINED for step in WAY_STEPS)
+    return all(strain(start + step * way) <= most for step in WAY_STEPS)
 
 
 def _short_way(skeleton: Skeleton, turns: np.ndarray) -> np.ndarray:

@@ -732,6 +732,30 @@ def test_an_answer_the_motors_can_hold_is_one_the_chain_gets_to_through_poses_th
     assert sol.iterations == 0  # found, and followed
 
 
+@pytest.mark.parametrize("solver", ["ccd", "fabrik"])
+def test_an_answer_held_at_rest_but_not_on_the_way_gives_way_to_one_held_all_the_way(solver):
+    # 46_heavy_weak_second_branch: two links hanging in strong gravity, resting where a
+    # torque-bound target left them (the base at 0.95 of its limit). CCD's and FABRIK's
+    # answer for the next target swings the elbow out: 0.93 at rest, but past 1 on the way.
+    # The other branch of the elbow is held all the way, and is the answer.
+    arm = Skeleton.chain([140.0, 130.0], limits=[(-r(150), r(150))] * 2, base_angle=-PI / 2)
+    strain = _hanging_strain(arm, np.array([6.4e5, 4.2e5]), [2.2, 1.8], 1800.0)
+    pose = np.radians([34.71, 79.69])
+    target = np.array([151.1, -218.8])
+    plain = RobustSolver(arm, solver)
+    for _ in range(40):
+        answer = plain.solve(pose, target, max_iterations=10, tolerance=TOLERANCE)
+        pose_on = answer.angles
+    assert not holds_along(strain, pose, pose_on - pose, HOLDS)
+    robust = RobustSolver(arm, solver)
+    robust.strain = strain
+    for _ in range(3 * STILL_CALLS + 20):
+        sol = robust.solve(pose, target, max_iterations=10, tolerance=TOLERANCE)
+    assert sol.status is SolveStatus.SUCCESS and sol.error <= TOLERANCE
+    assert strain(sol.angles) <= HOLDS
+    assert holds_along(strain, pose, sol.angles - pose, HOLDS)
+
+
 def _two_link_loads(base: np.ndarray, elbow: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The tip and each joint's static load of two hanging 100 px links of mass 1 in gravity
     of 1000 px/s^2, for local angles (radians, arrays of any shape)."""
