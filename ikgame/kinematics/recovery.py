@@ -393,62 +393,9 @@ class RobustSolver:
         if (
             plain.status is not SolveStatus.FAILURE
             and strain is not None
-            and goal != self._unheld
             and self._waiting >= STILL_CALLS
-            and strain(plain.angles) > STRAINED
         ):
-            # Still on its way too: a solver that takes many calls to arrive (CCD) would
-            # otherwise bring the end to the target in a pose the motors cannot hold, and the
-            # switch to one they can would carry it away again. Only for a target that holds
-            # still: one that moves would start a search, and pay its budget, on every call.
-            return self._held(
-                plain,
-                goal,
-                target,
-                tol,
-                (
-                    _near_seeds(skeleton, self._solve, skeleton.clamp(start), plain.angles),
-                    _far_held_seeds(
-                        skeleton, self._solve, self._fallback, plain.angles, target, strain
-                    ),
-                ),
-                lambda angles: strain(angles) <= HOLDS,
-                lambda angles: holds_along(strain, start, _short_way(skeleton, angles - start)),
-                lambda: _held_nearest_steps(
-                    skeleton, (skeleton.clamp(start), plain.angles), target, strain
-                ),
-            )
-        if (
-            plain.status is not SolveStatus.FAILURE
-            and strain is not None
-            and goal != self._way_searched
-            and self._waiting >= STILL_CALLS
-            and strain(start) > SPENT
-            and not holds_along(strain, start, _short_way(skeleton, plain.angles - start), HOLDS)
-        ):
-            # An answer the motors hold at rest but not on the way to it with the margin they
-            # rest with (HOLDS): from the pose where a torque-bound target left
-            # `46_heavy_weak_second_branch` (its base at 0.95 of its limit), CCD's and FABRIK's
-            # answer swung the elbow out (0.93 at rest, up to 1.03 on the way), and the elbow,
-            # its braking taking torque the base did not have, passed its goal by 30 deg. An
-            # answer whose way the motors hold so is searched for; with none (an arm lifted
-            # from a stretched rest, where no straight way holds), the plain answer it is.
-            held = self._held_way(
-                plain,
-                goal,
-                target,
-                tol,
-                (
-                    _near_seeds(skeleton, self._solve, skeleton.clamp(start), plain.angles),
-                    _far_held_seeds(
-                        skeleton, self._solve, self._fallback, plain.angles, target, strain
-                    ),
-                ),
-                lambda angles: strain(angles) <= HOLDS,
-                lambda angles: holds_along(
-                    strain, start, _short_way(skeleton, angles - start), HOLDS
-                ),
-            )
+            held = self._held_answer(plain, goal, target, tol, start, strain)
             if held is not None:
                 return held
         if plain.status is SolveStatus.SUCCESS:
@@ -717,6 +664,65 @@ class RobustSolver:
             answer = Solution(best.angles, status, iterations, best.error, best.errors)
             return self._keep(answer, goal, best is not plain and search.best_far)
         return Solution(best.angles, SolveStatus.PROCESSING, iterations, best.error, best.errors)
+
+    def _held_answer(
+        self,
+        plain: Solution,
+        goal: tuple[float, float],
+        target: np.ndarray,
+        tol: float,
+        start: np.ndarray,
+        strain: Callable[[np.ndarray], float],
+    ) -> Solution | None:
+        """The answer instead of ``plain`` (arrived, or on its way) for a target that holds
+        still, where the motors cannot hold it or the way to it from a spent rest (see
+        :meth:`_held` and :meth:`_held_way`); None where ``plain`` stands."""
+        skeleton = self._skeleton
+
+        def seeds() -> tuple[_Seeds, _Seeds]:
+            # The stall's restarts, then random poses and the slide (see _far_held_seeds).
+            return (
+                _near_seeds(skeleton, self._solve, skeleton.clamp(start), plain.angles),
+                _far_held_seeds(
+                    skeleton, self._solve, self._fallback, plain.angles, target, strain
+                ),
+            )
+
+        def holds(angles: np.ndarray) -> bool:
+            return strain(angles) <= HOLDS
+
+        def way(most: float) -> Callable[[np.ndarray], bool]:
+            return lambda angles: holds_along(
+                strain, start, _short_way(skeleton, angles - start), most
+            )
+
+        if goal != self._unheld and strain(plain.angles) > STRAINED:
+            # Still on its way too: a solver that takes many calls to arrive (CCD) would
+            # otherwise bring the end to the target in a pose the motors cannot hold, and the
+            # switch to one they can would carry it away again. Only for a target that holds
+            # still: one that moves would start a search, and pay its budget, on every call.
+            return self._held(
+                plain,
+                goal,
+                target,
+                tol,
+                seeds(),
+                holds,
+                way(STRAINED),
+                lambda: _held_nearest_steps(
+                    skeleton, (skeleton.clamp(start), plain.angles), target, strain
+                ),
+            )
+        if goal != self._way_searched and strain(start) > SPENT and not way(HOLDS)(plain.angles):
+            # An answer the motors hold at rest but not on the way to it with the margin they
+            # rest with (HOLDS): from the pose where a torque-bound target left
+            # `46_heavy_weak_second_branch` (its base at 0.95 of its limit), CCD's and FABRIK's
+            # answer swung the elbow out (0.93 at rest, up to 1.03 on the way), and the elbow,
+            # its braking taking torque the base did not have, passed its goal by 30 deg. An
+            # answer whose way the motors hold so is searched for; with none (an arm lifted
+            # from a stretched rest, where no straight way holds), the plain answer it is.
+            return self._held_way(plain, goal, target, tol, seeds(), holds, way(HOLDS))
+        return None
 
     def _held(
         self,
