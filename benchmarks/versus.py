@@ -33,7 +33,8 @@ import json, sys, time
 sys.path[:0] = [sys.argv[1], sys.argv[2]]
 from chains import chain_level
 from ikgame.sim import Simulation
-target, warm_up, ticks, batch = sys.argv[3], int(sys.argv[4]), int(sys.argv[5]), 400
+target, warm_up, ticks = sys.argv[3], int(sys.argv[4]), int(sys.argv[5])
+batch = min(400, ticks)
 sim = Simulation(chain_level(int(sys.argv[7]), target), record=False)
 for _ in range(warm_up):
     sim.step()
@@ -42,7 +43,7 @@ if sys.argv[6] == "count":
         sim.step()
     sys.exit()
 times = []
-for _ in range(max(1, ticks // batch)):
+for _ in range(ticks // batch):
     start = time.process_time()
     for _ in range(batch):
         sim.step()

@@ -701,14 +701,14 @@ class RobustSolver:
             # otherwise bring the end to the target in a pose the motors cannot hold, and the
             # switch to one they can would carry it away again. Only for a target that holds
             # still: one that moves would start a search, and pay its budget, on every call.
+            search, iterations = self._searched(plain, target, tol, seeds(), holds, way(STRAINED))
             return self._held(
                 plain,
                 goal,
                 target,
                 tol,
-                seeds(),
-                holds,
-                way(STRAINED),
+                search,
+                iterations,
                 lambda: _held_nearest_steps(
                     skeleton, (skeleton.clamp(start), plain.angles), target, strain
                 ),
@@ -721,7 +721,8 @@ class RobustSolver:
             # its braking taking torque the base did not have, passed its goal by 30 deg. An
             # answer whose way the motors hold so is searched for; with none (an arm lifted
             # from a stretched rest, where no straight way holds), the plain answer it is.
-            return self._held_way(plain, goal, target, tol, seeds(), holds, way(HOLDS))
+            search, iterations = self._searched(plain, target, tol, seeds(), holds, way(HOLDS))
+            return self._held_way(plain, goal, target, search, iterations)
         return None
 
     def _held(
@@ -730,14 +731,13 @@ class RobustSolver:
         goal: tuple[float, float],
         target: np.ndarray,
         tol: float,
-        seeds: tuple[_Seeds, _Seeds],
-        holds: Callable[[np.ndarray], bool],
-        way: Callable[[np.ndarray], bool],
+        search: _Search,
+        iterations: int,
         nearest: Callable[[], Generator[int, None, np.ndarray | None]],
     ) -> Solution:
-        """After a plain solve that arrives in a pose the motors cannot hold: restarts from the
-        seeds of a stall, in which only arrivals they can hold (``holds``) count. The first the
-        chain can get to through poses they hold (``way``) wins and is followed. The first they
+        """After a plain solve that arrives in a pose the motors cannot hold, the ``search``:
+        restarts from the seeds of a stall, in which only arrivals they can hold count. The first
+        the chain can get to through poses they hold wins and is followed. The first they
         hold only at rest is served while the search goes on, and followed once it has tried
         every seed; with none, the plain answer serves meanwhile.
 
@@ -760,7 +760,6 @@ class RobustSolver:
         sagged, lifted and sagged again as the joints beyond them came in: the five weak links
         of `29_five_weak_links` moved their end 3 to 4 px in the last half second of the
         torque-bound target's hold."""
-        search, iterations = self._searched(plain, target, tol, seeds, holds, way)
         found = search.best if search.arrived else None
         if found is None and search.exhausted:
             found = search.fallback
@@ -813,17 +812,13 @@ class RobustSolver:
         plain: Solution,
         goal: tuple[float, float],
         target: np.ndarray,
-        tol: float,
-        seeds: tuple[_Seeds, _Seeds],
-        holds: Callable[[np.ndarray], bool],
-        way: Callable[[np.ndarray], bool],
+        search: _Search,
+        iterations: int,
     ) -> Solution | None:
         """After a plain solve whose answer the motors hold (or one on its way) but not the
-        way to it: restarts from the seeds of a stall, in which only an arrival they hold
-        (``holds``) through poses they hold (``way``) counts, and replaces the plain answer.
-        The plain answer serves while the search goes on; once it has tried every seed, None
-        (the plain answer is taken as any other)."""
-        search, iterations = self._searched(plain, target, tol, seeds, holds, way)
+        way to it, the ``search`` for an arrival they hold through poses they hold: it replaces
+        the plain answer. The plain answer serves while the search goes on; once it has tried
+        every seed, None (the plain answer is taken as any other)."""
         if search.arrived:
             error = _error(self._skeleton, search.best, target)
             answer = Solution(search.best, SolveStatus.SUCCESS, iterations, error)
