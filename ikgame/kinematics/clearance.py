@@ -502,9 +502,13 @@ class Clearance:
         tolerance: float,
         avoid: bool,
         trail: list[np.ndarray] | None = None,
+        *,
+        slide: bool = False,
     ) -> _Work[Solution]:
         """:meth:`polish`, an iteration (``ITERATION_UNITS`` of work) a step; with ``trail``,
-        each clear pose it steps through is appended to it."""
+        each clear pose it steps through is appended to it; with ``slide``, a step that brings
+        a link near an obstacle is a sliding step (:meth:`_sliding`, ``ITERATION_UNITS`` more)
+        of the one the polish asks for, so the poses keep the margin."""
         sk = self.skeleton
         pose = sk.clamp(np.asarray(angles, dtype=float).copy())
         links, points, scale = self._aim(target)
@@ -561,7 +565,10 @@ class Clearance:
             largest = float(np.abs(step).max())
             if largest > _MAX_STEP:
                 step *= _MAX_STEP / largest
-            pose = sk.clamp(pose + step)
+            if slide and near.size:
+                pose = yield from self._sliding(pose, step)
+            else:
+                pose = sk.clamp(pose + step)
         status = SolveStatus.SUCCESS
         if best_key[0] > 0.0 or np.any(best_misses > tolerance):
             status = SolveStatus.PROCESSING
@@ -1089,19 +1096,19 @@ class Clearance:
         at most.
 
         A chain's two trees first grow along the ways its polish draws the end from each root
-        toward the retreat point (:meth:`_retreating`), and the goal's tree reaches for the end of
-        the start's before any pose is drawn at random."""
+        toward the retreat point (:meth:`_retreating`, sliding with ``slide``), and the goal's
+        tree reaches for the end of the start's before any pose is drawn at random. Poses are
+        drawn within :meth:`_sampled_box`."""
         sk = self.skeleton
         rng = np.random.default_rng(RANDOM_SEED)
-        low = np.maximum(sk.lower, start - math.pi)
-        high = np.minimum(sk.upper, start + math.pi)
+        low, high = self._sampled_box(start, goal)
         ends = self._link_gaps(np.stack((start, goal)))
         yield CHECK_UNITS + 2 * self._pose_units
         trees = [_Tree(start, ends[0]), _Tree(goal, ends[1])]
         from_start, from_goal = trees
         if sk.is_chain:
-            out = yield from self._retreating(from_start)
-            yield from self._retreating(from_goal)
+            out = yield from self._retreating(from_start, slide=slide)
+            yield from self._retreating(from_goal, slide=slide)
             reached, arrived = yield from self._extend(from_goal, from_start.poses[out], reach=True)
             if arrived:
                 return (from_start.lineage(out) + from_goal.lineage(reached)[::-1])[1:]
@@ -1123,7 +1130,26 @@ class Clearance:
             trees.reverse()
         return None
 
-    def _retreating(self, tree: _Tree) -> _Work[int]:
+    def _sampled_box(self, start: np.ndarray, goal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The lowest and highest angle of each joint the route trees from ``start`` to
+        ``goal`` draw poses between, radians: within the limits, a half turn either side of the
+        start (a free joint's every angle, once), and as far as the goal. A goal bent the other
+        way from a joint on its stop lies more than a half turn off (from +150 deg to -78 deg,
+        under a shelf): without it the trees never drew a pose on the goal's side of that joint,
+        and found no way to it in 430,000 units of work.
+
+        >>> arm = Skeleton.chain([100.0, 100.0], limits=[None, (-2.6, 2.6)])
+        >>> room = Clearance(arm, np.full(2, 5.0), Obstacles.from_arrays(np.empty((0, 5)), []))
+        >>> low, high = room._sampled_box(np.array([0.0, 2.6]), np.array([0.0, -1.4]))
+        >>> np.round(low, 2).tolist(), np.round(high, 2).tolist()
+        ([-3.14, -1.4], [3.14, 2.6])
+        """
+        sk = self.skeleton
+        low = np.maximum(sk.lower, np.minimum(start - math.pi, goal))
+        high = np.minimum(sk.upper, np.maximum(start + math.pi, goal))
+        return low, high
+
+    def _retreating(self, tree: _Tree, *, slide: bool = False) -> _Work[int]:
         """Grow a chain's ``tree`` from its root along the poses its polish steps through
         drawing the end toward the retreat point (half the chain's reach out along the base's
         mount, where a chain stands folded clear of what is around its base), as far as each
@@ -1131,12 +1157,20 @@ class Clearance:
         (the root's when none).
 
         A chain threaded under a shelf comes out along its own clearance rows, a way random
-        poses almost never fall on."""
+        poses almost never fall on. With ``slide`` (the sliding trees' retreats), each polish
+        step that brings a link near an obstacle is a sliding step (:meth:`_sliding`) of it:
+        the polish's clearance rows only weigh against the pull on the end, and drawn up and
+        out from under a shelf the end pressed into the shelf's underside to within the 2 px a
+        line keeps, so the trail's lines were not clear and the tree stopped under the shelf
+        (five 80 px links, the end at (140, 70)); sliding along the underside, the trail leads
+        out into the open in ten poses."""
         sk = self.skeleton
         mount = np.array([math.cos(sk.base_angle), math.sin(sk.base_angle)])
         point = np.asarray(sk.base, dtype=float) + 0.5 * sk.reach * mount
         trail: list[np.ndarray] = []
-        yield from self._polishing(tree.poses[0], point, POLISH_ITERATIONS, 0.5, True, trail)
+        yield from self._polishing(
+            tree.poses[0], point, POLISH_ITERATIONS, 0.5, True, trail, slide=slide
+        )
         last = 0
         for pose in trail[1:]:
             new, arrived = yield from self._extend(tree, pose, reach=True)

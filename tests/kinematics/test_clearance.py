@@ -1167,3 +1167,48 @@ def test_a_solvers_clear_answer_on_a_stop_is_routed_to_only_when_none_off_the_st
     goals.clear()
     goal = _finish(guide._planning(start, answer, DEEPER, 0.5, answer))[0]
     assert np.array_equal(goal, answer) and len(goals) == 1
+
+
+def _deep_shelf_room() -> Clearance:
+    """Five 80 px links (limits +-150 deg) mounted straight up over a floor 20 px below the
+    base, and a shelf 100 px up to the right from x = 110 px (a stress level under a shelf)."""
+    limit = math.radians(150.0)
+    arm = Skeleton.chain([80.0] * 5, base_angle=UP, limits=[(-limit, limit)] * 5)
+    obstacles = Obstacles.from_arrays(
+        np.array([[-600.0, -20.0, 600.0, -20.0, 0.0], [110.0, 100.0, 450.0, 100.0, 6.0]]),
+        NO_CIRCLES,
+    )
+    return Clearance(arm, np.full(5, 6.0), obstacles)
+
+
+# The tip at (190, 35) under the shelf, the links out along it without a fold back.
+SPREAD_UNDER = np.radians([0.7, -7.6, -118.9, -26.9, 58.1])
+
+
+def test_a_sliding_retreat_leads_out_from_under_the_shelf_where_the_polish_steps_stop():
+    room = _deep_shelf_room()
+    assert room.is_clear(SPREAD_UNDER)
+    ends = {}
+    for slide in (False, True):
+        tree = clearance._Tree(SPREAD_UNDER, room._link_gaps(SPREAD_UNDER[None])[0])
+        last = _finish(room._retreating(tree, slide=slide))
+        ends[slide] = room.points(tree.poses[last])[-1]
+        for child in range(1, tree.size):
+            assert room.path_clear(tree.poses[tree.parents[child]], tree.poses[child])
+    # The polish's own steps press the end into the shelf's underside: the tree stops there.
+    assert ends[False][0] > 110.0 and ends[False][1] < 100.0
+    # Sliding along it, the tree reaches the retreat point, half the reach straight up.
+    assert math.dist(ends[True], (0.0, 200.0)) < 1.0
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_the_route_trees_draw_poses_from_the_start_as_far_as_the_goal(seed):
+    room = _deep_shelf_room()
+    rng = np.random.default_rng(seed)
+    sk = room.skeleton
+    start, goal = rng.uniform(sk.lower, sk.upper, (2, sk.count))
+    start[2], goal[2] = sk.upper[2], sk.lower[2] + 0.5  # a goal bent the other way from a stop
+    low, high = room._sampled_box(start, goal)
+    assert np.all((low <= start) & (start <= high)) and np.all((low <= goal) & (goal <= high))
+    assert np.all(low >= sk.lower) and np.all(high <= sk.upper)
+    assert np.all(low >= np.minimum(start - math.pi, goal))
