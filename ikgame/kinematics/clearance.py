@@ -33,10 +33,11 @@ width). A chain aims its end effector at a point; a tree aims a
   stop, instead of stopping there, so they follow a narrow passage between obstacles that
   straight steps seldom sample; the trees of straight steps go on only if they find none.
   Either way the pieces are shortened greedily, and the chain is steered through these via
-  poses one after the other. A chain's two trees first grow
-  along the poses its polish steps through drawing the end from each tree's root toward a point
-  out in the open (the retreat), and a tree's piece whose links' gaps at its two ends outweigh how
-  far the links can sweep between them is clear without sampling. A route that takes the
+  poses one after the other. A chain's two trees first grow along the poses its polish steps
+  through drawing the end from each tree's root toward a point out in the open (the retreat;
+  the sliding trees' polish slides along what it meets). The trees draw poses as far as the
+  goal, and a tree's piece whose links' gaps at its two ends outweigh how far the links can
+  sweep between them is clear without sampling. A route that takes the
   targeted ends past the target and back is cut where they come nearest it (on its last
   piece, which ends on the target, where they pass it before swinging out). An
   :class:`Avoider` remembers the last route of several pieces it took up: a chain still at its
