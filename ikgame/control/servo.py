@@ -402,7 +402,8 @@ class Servo:
                 u = d = (lim + abs(h)) / i
             up.append(u)
             down.append(d)
-            side = 1.0 if e > 0.0 else -1.0 if e < 0.0 else 0.0 if e == 0.0 else e  # _sign(e)
+            # _sign(e), written out: this loop runs for every joint on every tick.
+            side = 1.0 if e > 0.0 else -1.0 if e < 0.0 else 0.0 if e == 0.0 else e
             load, speed_now = side * h, abs(v)
             if (
                 pushing
