@@ -737,6 +737,27 @@ def test_a_straight_line_is_judged_as_its_sampled_poses_judge_it(monkeypatch):
     assert calls == []
 
 
+def test_a_line_blocked_near_its_far_end_is_found_blocked_from_that_end():
+    room = _shelf_room()
+    rng = np.random.default_rng(3)
+    size = clearance.PATH_CHUNK
+    found = 0
+    for _ in range(400):
+        a, b = rng.uniform(-2.0, 2.0, (2, 3))
+        poses = room._samples(a, b)
+        gaps = room.smallest_gaps(poses)
+        blocked = np.flatnonzero(gaps[1:] < _least_gap(room.margin / 2.0, float(gaps[0]))) + 1
+        last = (len(poses) - 1) // size * size  # where the last chunk starts
+        if len(poses) <= 3 * size or not len(blocked) or blocked[0] < last:
+            continue
+        # The first chunk, then the last: not the whole line.
+        chunks = [size, len(poses) - last]
+        units = sum(clearance.CHECK_UNITS + n * room._pose_units for n in chunks)
+        assert _worked(room._checking(a, b)) == (False, pytest.approx(units))
+        found += 1
+    assert found > 3
+
+
 def test_a_chain_at_rest_in_the_open_is_not_measured_again(monkeypatch):
     room = _shelf_room()
     guide = Avoider(room)
@@ -1199,6 +1220,45 @@ def test_a_sliding_retreat_leads_out_from_under_the_shelf_where_the_polish_steps
     assert ends[False][0] > 110.0 and ends[False][1] < 100.0
     # Sliding along it, the tree reaches the retreat point, half the reach straight up.
     assert math.dist(ends[True], (0.0, 200.0)) < 1.0
+
+
+# The tip at (290, 40) deep under the shelf, the third joint bending the links back down into
+# the gap between the shelf's end and the base before they run out under it.
+FOLDED_DEEP = np.radians([-8.4, -61.6, -77.4, 57.3, 0.7])
+
+
+def test_a_walked_retreat_draws_the_chain_out_from_under_the_shelf_the_way_its_links_lie():
+    room = _deep_shelf_room()
+    assert room.is_clear(FOLDED_DEEP)
+    ends = {}
+    for walk in (False, True):
+        tree = clearance._Tree(FOLDED_DEEP, room._link_gaps(FOLDED_DEEP[None])[0])
+        last = _finish(room._retreating(tree, slide=True, walk=walk))
+        ends[walk] = room.points(tree.poses[last])[-1]
+        for child in range(1, tree.size):
+            assert room.path_clear(tree.poses[tree.parents[child]], tree.poses[child])
+    # Drawn straight at the retreat point, the end stops under the shelf.
+    assert ends[False][0] > 110.0 and ends[False][1] < 100.0
+    # Led back along its own links to the base, the chain comes out and reaches it.
+    assert math.dist(ends[True], (0.0, 200.0)) < 1.0
+
+
+def test_a_walked_retreat_whose_end_falls_behind_stops_there():
+    # Four 80 px links reaching along the floor in under a round rock to its far side: drawn
+    # back toward the base, the fold under the rock comes to its stop and the end is caught.
+    limit = math.radians(150.0)
+    arm = Skeleton.chain([80.0] * 4, base_angle=UP, limits=[(-limit, limit)] * 4)
+    floor = np.array([[-600.0, -20.0, 600.0, -20.0, 4.0]])
+    room = Clearance(arm, np.full(4, 6.0), Obstacles.from_arrays(floor, [[155.0, 70.0, 42.0]]))
+    under = np.radians([-94.4, 90.8, -136.7, 53.0])
+    assert room.is_clear(under)
+    tree = clearance._Tree(under, room._link_gaps(under[None])[0])
+    last, units = _worked(room._retreating(tree, slide=True, walk=True))
+    assert room.points(tree.poses[last])[-1][1] < 70.0  # still under the rock
+    line = np.concatenate((room.points(under)[::-1], [[0.0, 160.0]]))
+    marks = clearance._marks(_finish(room._taut(line)), clearance.WALK_STEP)
+    # Polished toward every mark of the way out, it took 49,000 units; it gives up within a few.
+    assert units < 0.2 * len(marks) * clearance.WALK_ITERATIONS * ITERATION_UNITS
 
 
 @pytest.mark.parametrize("seed", range(5))
