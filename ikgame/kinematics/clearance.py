@@ -1227,11 +1227,11 @@ class Clearance:
 
         With ``walk`` (sliding too), the end is drawn ``WALK_STEP`` px at a time along a way in
         the plane back along the root's own links to the base and from there out to the
-        retreat point (pulled taut, as :meth:`tip_path`). Drawn straight at the retreat point,
-        five links deep under a shelf, folded so that the third joint bends the links back
-        under it, stopped 136 px out with that joint on its stop; led back the way its links
-        lie, the chain draws out from under the shelf like a snake and reaches the retreat
-        point."""
+        retreat point (pulled taut, as :meth:`tip_path`), until it falls behind by more than a
+        step. Drawn straight at the retreat point, five links deep under a shelf, folded so
+        that the third joint bends the links back under it, stopped with the end at (136, 84),
+        still under the shelf, and that joint on its stop; led back the way its links lie, the
+        chain draws out from under the shelf like a snake and reaches the retreat point."""
         sk = self.skeleton
         mount = np.array([math.cos(sk.base_angle), math.sin(sk.base_angle)])
         point = np.asarray(sk.base, dtype=float) + 0.5 * sk.reach * mount
