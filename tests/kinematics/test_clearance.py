@@ -1202,6 +1202,16 @@ def _deep_shelf_room() -> Clearance:
     return Clearance(arm, np.full(5, 6.0), obstacles)
 
 
+def _retreat_end(room: Clearance, root: np.ndarray, **kind: bool) -> np.ndarray:
+    """Where the end of a tree grown from ``root`` along its retreat (``slide``, ``walk``) ends
+    up, px, every piece of the tree checked clear."""
+    tree = clearance._Tree(root, room._link_gaps(root[None])[0])
+    last = _finish(room._retreating(tree, **kind))
+    for child in range(1, tree.size):
+        assert room.path_clear(tree.poses[tree.parents[child]], tree.poses[child])
+    return room.points(tree.poses[last])[-1]
+
+
 # The tip at (190, 35) under the shelf, the links out along it without a fold back.
 SPREAD_UNDER = np.radians([0.7, -7.6, -118.9, -26.9, 58.1])
 
@@ -1209,13 +1219,7 @@ SPREAD_UNDER = np.radians([0.7, -7.6, -118.9, -26.9, 58.1])
 def test_a_sliding_retreat_leads_out_from_under_the_shelf_where_the_polish_steps_stop():
     room = _deep_shelf_room()
     assert room.is_clear(SPREAD_UNDER)
-    ends = {}
-    for slide in (False, True):
-        tree = clearance._Tree(SPREAD_UNDER, room._link_gaps(SPREAD_UNDER[None])[0])
-        last = _finish(room._retreating(tree, slide=slide))
-        ends[slide] = room.points(tree.poses[last])[-1]
-        for child in range(1, tree.size):
-            assert room.path_clear(tree.poses[tree.parents[child]], tree.poses[child])
+    ends = {slide: _retreat_end(room, SPREAD_UNDER, slide=slide) for slide in (False, True)}
     # The polish's own steps press the end into the shelf's underside: the tree stops there.
     assert ends[False][0] > 110.0 and ends[False][1] < 100.0
     # Sliding along it, the tree reaches the retreat point, half the reach straight up.
@@ -1230,13 +1234,7 @@ FOLDED_DEEP = np.radians([-8.4, -61.6, -77.4, 57.3, 0.7])
 def test_a_walked_retreat_draws_the_chain_out_from_under_the_shelf_the_way_its_links_lie():
     room = _deep_shelf_room()
     assert room.is_clear(FOLDED_DEEP)
-    ends = {}
-    for walk in (False, True):
-        tree = clearance._Tree(FOLDED_DEEP, room._link_gaps(FOLDED_DEEP[None])[0])
-        last = _finish(room._retreating(tree, slide=True, walk=walk))
-        ends[walk] = room.points(tree.poses[last])[-1]
-        for child in range(1, tree.size):
-            assert room.path_clear(tree.poses[tree.parents[child]], tree.poses[child])
+    ends = {walk: _retreat_end(room, FOLDED_DEEP, slide=True, walk=walk) for walk in (False, True)}
     # Drawn straight at the retreat point, the end stops under the shelf.
     assert ends[False][0] > 110.0 and ends[False][1] < 100.0
     # Led back along its own links to the base, the chain comes out and reaches it.
