@@ -1112,10 +1112,11 @@ class Clearance:
         tree reaches for the end of the start's before any pose is drawn at random. Poses are
         drawn within :meth:`_sampled_box`. A chain's sliding trees, once their random poses
         have done ``TREE_FIRST`` units of work, grow along the walked retreats too (see
-        :meth:`_retreating`), and the goal's reaches for the start's new end: where the trees find a way
-        at all they find it soon (under ``27_round_rock``'s rock in 10,000 units), and walked
-        first the retreats made that way 0.4 s later; five links folded the other way deep
-        under a shelf took the random trees 210,000 units, their walked retreats 17,000."""
+        :meth:`_retreating`), and the goal's reaches for the start's new end: where the trees
+        find a way at all they find it soon (under ``27_round_rock``'s rock in 10,000 units),
+        and walked first the retreats made that way 0.4 s later; five links folded the other
+        way deep under a shelf took the random trees 210,000 units, their walked retreats
+        17,000."""
         sk = self.skeleton
         rng = np.random.default_rng(RANDOM_SEED)
         low, high = self._sampled_box(start, goal)
