@@ -71,6 +71,16 @@ _IMPULSE: Final = _chipmunk.lib.cpConstraintGetImpulse
 """Chipmunk's own motor setters and getter, called per motor each tick on the motors' C structs
 (what pymunk's properties call, without a Python call in between: half the cost on a long
 chain)."""
+_EACH_BODY: Final = _chipmunk.lib.cpSpaceEachBody
+_GET_BODIES: Final = _chipmunk.ffi.addressof(_chipmunk.lib, "pmSpaceBodyGetIteratorFuncBatched")
+_SET_BODIES: Final = _chipmunk.ffi.addressof(_chipmunk.lib, "pmSpaceBodySetIteratorFuncBatched")
+"""What ``pymunk.batch.get_space_bodies`` and ``set_space_bodies`` call, called with a request
+built once per world (see :func:`_batch_request`): a short chain's tick spent more on building
+the request every time than on the read or the write."""
+_LOCAL_TO_WORLD: Final = _chipmunk.lib.cpBodyLocalToWorld
+_GRAVITY: Final = _chipmunk.lib.cpSpaceGetGravity
+"""What ``Body.local_to_world`` and ``Space.gravity`` call, without pymunk's ``Vec2d`` around
+the answer."""
 
 _BRACE_RAD: Final = 1e-9
 """How far beyond a braced joint's angle (back into its range) its stop is set, radians: pymunk
@@ -266,12 +276,16 @@ class World:
         self._lengths = 2.0 * np.array(self._halves, dtype=float)
         self._halves_array = 0.5 * self._lengths
         self._feed_forward: list[float] | np.ndarray = [0.0] * self.count
+        self._cp_space = self.space._space  # the C space, for chipmunk's own calls
         self._reads = pymunk.batch.Buffer()
+        self._read_request = _batch_request(self._reads, _STATE)
+        self._read_state: np.ndarray | None = None
+        self._read_at: object = None
         self._rows: _Rows | None = None
         self._link_angles: np.ndarray | None = None
         self._joints: tuple[np.ndarray, np.ndarray] | None = None
         self._effector_ends = [
-            (self.bodies[i], (self._halves[i], 0.0)) for i in self.effector_links.tolist()
+            (self.bodies[i]._body, (self._halves[i], 0.0)) for i in self.effector_links.tolist()
         ]
         self._stops = _Stops(self.limit_joints, self.max_speed)
 
@@ -292,7 +306,7 @@ class World:
     @property
     def gravity(self) -> tuple[float, float]:
         """Gravity now, ``(x, y)`` px/s^2."""
-        gravity = self.space.gravity
+        gravity = _GRAVITY(self._cp_space)
         return gravity.x, gravity.y
 
     def joint_velocities(self) -> np.ndarray:
@@ -321,10 +335,15 @@ class World:
     def _state(self) -> tuple[np.ndarray, _Rows]:
         """Every body's x, y, angle and angular velocity in one read (a view of a buffer the
         next read reuses), and which rows are whose."""
-        batch = self._reads
-        batch.clear()
-        pymunk.batch.get_space_bodies(self.space, _STATE, batch)
-        state = np.frombuffer(batch.float_buf()).reshape(-1, 4)
+        floats = self._reads._float_arr
+        floats.num = 0
+        _EACH_BODY(self._cp_space, _GET_BODIES, self._read_request)
+        # The read fills the same memory each time while the space keeps its bodies: the array
+        # over it is made again only when it moved or changed size.
+        state = self._read_state
+        if state is None or floats.arr != self._read_at or floats.num != state.size:
+            self._read_at = floats.arr
+            state = self._read_state = np.frombuffer(self._reads.float_buf()).reshape(-1, 4)
         rows = self._rows
         if rows is None or rows.count != len(state):
             rows = self._rows = _Rows(self, len(state))
@@ -348,9 +367,8 @@ class World:
 
     def effector_positions(self) -> np.ndarray:
         """(k, 2) world position of each end effector, px, in :attr:`effector_links` order."""
-        return np.array(
-            [body.local_to_world(end) for body, end in self._effector_ends], dtype=float
-        )
+        ends = [_LOCAL_TO_WORLD(body, end) for body, end in self._effector_ends]
+        return np.array([(end.x, end.y) for end in ends], dtype=float)
 
     def link_ends(self, links: np.ndarray) -> np.ndarray:
         """(m, 2) world position of the far end of each of ``links`` (indices), px."""
@@ -445,7 +463,7 @@ class World:
         compiled = self._compiled
         if compiled is not None:
             self._feed_forward = np.array(torques, dtype=float)
-            pymunk.batch.set_space_bodies(self.space, _LOADS, rows.writes)
+            rows.write(self._cp_space)
             # The same calls as the loops below, in the same order, with the same floats.
             motors, returns = compiled
             shares = 0.5 * np.asarray(budgets, dtype=float)
@@ -455,7 +473,7 @@ class World:
         if feed_forward is None:
             feed_forward = np.asarray(torques, dtype=float).tolist()
         self._feed_forward = feed_forward
-        pymunk.batch.set_space_bodies(self.space, _LOADS, rows.writes)
+        rows.write(self._cp_space)
         wanted, shares = rates.tolist(), budgets.tolist()
         if self._returns:
             shares = [0.5 * b for b in shares]
@@ -657,6 +675,17 @@ def _apart(skeleton: Skeleton) -> np.ndarray:
     return ~(related | siblings)
 
 
+def _batch_request(buffer: pymunk.batch.Buffer, fields: pymunk.batch.BodyFields) -> object:
+    """The request ``pymunk.batch`` builds for every read or write of ``fields`` of every body
+    through ``buffer``, built once: it points at the buffer's arrays, which stay where they are
+    (their contents move, not the arrays)."""
+    request = _chipmunk.ffi.new("pmBatchedData *")
+    request.fields = fields.value
+    request.floatArray = buffer._float_arr
+    request.intArray = buffer._int_arr
+    return request
+
+
 def _direction(angle: float) -> np.ndarray:
     """(2,) unit vector at ``angle`` radians."""
     return np.array((math.cos(angle), math.sin(angle)))
@@ -697,6 +726,15 @@ class _Rows:
         """Force x, y and torque per row, written to the space each tick."""
         self.writes = pymunk.batch.Buffer()
         self.writes.set_float_buf(self.loads)
+        self._write_request = _batch_request(self.writes, _LOADS)
+
+    def write(self, space: object) -> None:
+        """Give every body of the chipmunk ``space`` its row of :attr:`loads` (what
+        ``pymunk.batch.set_space_bodies`` does)."""
+        floats = self.writes._float_arr
+        size, floats.num = floats.num, 0  # the write walks the rows from the first
+        _EACH_BODY(space, _SET_BODIES, self._write_request)
+        floats.num = size
 
 
 class _Stops:
