@@ -381,7 +381,7 @@ class Simulation:
                 # it from its target (jammed) only because pushing would get it nowhere.
                 return (
                     bool(limited.any())
-                    or bool(self.controller.servo.stalled.any())
+                    or self.controller.servo.any_stalled
                     or (avoider is not None and avoider.jammed)
                     or self.world.touching()
                 )

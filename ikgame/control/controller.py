@@ -173,10 +173,15 @@ class Controller:
     @skeleton.setter
     def skeleton(self, skeleton: Skeleton) -> None:
         self.solver.skeleton = skeleton
+        # The solver's, read on every tick without the two properties in between.
+        self._skeleton = skeleton
         self._fresh = None
         # The damping of the target's pseudo-inverse (see _goal_rates), px^2, per chain.
         self._damping = (0.01 * skeleton.reach) ** 2
         self._lengths = skeleton.lengths.tolist()
+        self._base = tuple(skeleton.base.tolist())
+        # A short chain's tip is carried along over floats (see _chain_rates).
+        self._float_chain = skeleton.is_chain and skeleton.count <= FLOAT_LINKS
         if self.avoider is not None:
             self.avoider.clearance.skeleton = skeleton
 
@@ -213,13 +218,9 @@ class Controller:
             return None, False
         if isinstance(target, TargetSet) != isinstance(previous, TargetSet):
             return None, True
-        skeleton = self.skeleton
-        if (
-            not isinstance(target, TargetSet)
-            and skeleton.is_chain
-            and skeleton.count <= FLOAT_LINKS
-        ):
+        if self._float_chain and not isinstance(target, TargetSet):
             return self._chain_rates(measured, target, previous, dt, base_motion)
+        skeleton = self._skeleton
         if isinstance(target, TargetSet):
             if not np.array_equal(previous.links, target.links):
                 return None, True
@@ -266,8 +267,7 @@ class Controller:
         system itself), one branch to scale, and no numpy call on two or ten numbers."""
         (tx, ty), (px, py) = target.tolist(), previous.tolist()
         vx, vy = (tx - px) / dt, (ty - py) / dt
-        skeleton = self.skeleton
-        bx, by = skeleton.base.tolist()
+        bx, by = self._base
         if base_motion is not None:
             (bvx, bvy), spin = base_motion[0].tolist(), base_motion[1]
             vx, vy = vx - bvx - spin * -(ty - by), vy - bvy - spin * (tx - bx)
@@ -275,8 +275,8 @@ class Controller:
             return None, False
         rates = damped_rates(
             self._lengths,
-            (bx, by),
-            skeleton.base_angle,
+            self._base,
+            self._skeleton.base_angle,
             measured.tolist(),
             (vx, vy),
             self._damping,
@@ -371,7 +371,10 @@ class Controller:
             if solution is None:
                 solution = self._solve(measured, target)
             self._held = solution.angles
-        error = joint_error(solution.angles, measured, self._limited)
+        if self._all_limited:
+            error = solution.angles - measured  # joint_error with nothing to wrap
+        else:
+            error = joint_error(solution.angles, measured, self._limited)
         if servo is None:
             rates = np.clip(self.gain * error, -self.max_speed, self.max_speed)
             return Command(solution, rates)
@@ -381,7 +384,7 @@ class Controller:
         steered = self.avoider is not None and not self.avoider.idle
         drive = servo.command(
             error,
-            self.skeleton.world_angles(measured),
+            self._skeleton.world_angles(measured),
             velocities,
             gravity,
             dt,
@@ -475,7 +478,7 @@ class Controller:
         """
         servo = self.servo
         strain = self.solver.strain
-        if strain is None or servo is None or not servo.stalled.any():
+        if strain is None or servo is None or not servo.any_stalled:
             return False
         if float(np.abs(velocities).max()) > SETTLING:
             return False
@@ -547,7 +550,7 @@ class Controller:
         if moved:
             if goal_rates is None:
                 return None
-            fresh.angles = self.skeleton.clamp(fresh.angles + goal_rates * dt)
+            fresh.angles = self._skeleton.clamp(fresh.angles + goal_rates * dt)
             fresh.carried = True
         answer = fresh.solution
         return Solution(fresh.angles, SolveStatus.SUCCESS, 0, answer.error, answer.errors)

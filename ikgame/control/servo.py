@@ -144,6 +144,12 @@ class Servo:
         :meth:`retry`)."""
         return np.array(self._stalled) != 0.0
 
+    @property
+    def any_stalled(self) -> bool:
+        """True when some joint has stalled: ``stalled.any()``, without building the array."""
+        stalled = self._stalled
+        return any(stalled) if isinstance(stalled, list) else bool(stalled.any())
+
     def strain(self, world_angles: np.ndarray, gravity: tuple[float, float]) -> float:
         """The largest share of a joint's torque limit that holding the chain still at
         ``world_angles`` (per link, radians) takes under ``gravity`` (px/s^2): past 1, the
