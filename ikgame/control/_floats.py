@@ -26,6 +26,9 @@ from ikgame.control.dynamics import (
 Loads = ListLoads
 """Joint torques, then the x and y of the pivot forces, per joint."""
 
+_Pulled = tuple[list[float], list[float], list[float], list[float]]
+"""See :meth:`FloatInertia.pulled`."""
+
 
 class FloatInertia:
     """A :class:`ChainInertia` as lists of floats, with its sums along the links."""
@@ -42,6 +45,29 @@ class FloatInertia:
         self.moment_beyond: list[float] = chain.moment_beyond.tolist()
         # (child, parent) pairs from the last child to the first: the order sums gather in.
         self.hanging = [(i, p) for i, p in reversed(list(enumerate(self.parents))) if p >= 0]
+        self._pulled: tuple[tuple[float, float], _Pulled] | None = None
+
+    def pulled(self, gravity: tuple[float, float]) -> _Pulled:
+        """A serial chain's loads of ``gravity`` (px/s^2) that no pose changes, as
+        :meth:`_ChainPose.rest` sums them tip to base: per joint, the x and y of the force on
+        everything beyond it, and those plus the next joint's (the pair its torque turns).
+        Worked out again only when the gravity changes."""
+        pulled = self._pulled
+        if pulled is not None and pulled[0] == gravity:
+            return pulled[1]
+        n, masses = self.count, self.masses
+        gx, gy = 0.0 - gravity[0], 0.0 - gravity[1]
+        force_x, force_y, pair_x, pair_y = [0.0] * n, [0.0] * n, [0.0] * n, [0.0] * n
+        gsx = gsy = gbx = gby = -0.0
+        for i in range(n - 1, -1, -1):
+            m = masses[i]
+            gsx += m * gx
+            gsy += m * gy
+            force_x[i], force_y[i], pair_x[i], pair_y[i] = gsx, gsy, gsx + gbx, gsy + gby
+            gbx, gby = gsx, gsy
+        forces = force_x, force_y, pair_x, pair_y
+        self._pulled = gravity, forces
+        return forces
 
     def along(self, values: list[float]) -> list[float]:
         """Each link's value plus all its ancestors' (``ChainInertia.along``)."""
@@ -174,28 +200,34 @@ class _ChainPose(FloatPose):
         lx, ly, masses = self.lx, self.ly, tree.masses
         gx, gy = (0.0, 0.0) if gravity is None else gravity
         if alpha is None and omega is None:
-            # Gravity alone: every centre's acceleration is 0.0 - g, as numpy's zeros give.
-            cx, cy = 0.0 - gx, 0.0 - gy
-            own_x, own_y = [m * cx for m in masses], [m * cy for m in masses]
-        else:
-            own_x, own_y = [0.0] * n, [0.0] * n
-            jx = jy = -0.0
-            for i in range(n):
-                x, y = lx[i], ly[i]
-                # The accelerations start from numpy's zeros, which alpha and omega add to.
-                if alpha is None:
-                    ax = ay = 0.0
-                else:
-                    ax, ay = 0.0 + alpha[i] * -y, 0.0 + alpha[i] * x
-                if omega is not None:
-                    w = omega[i]
-                    ax, ay = ax - w * w * x, ay - w * w * y
-                jx += ax
-                jy += ay
-                # Each joint accelerates with everything before it; each centre with half its
-                # link.
-                own_x[i] = masses[i] * (jx - 0.5 * ax - gx)
-                own_y[i] = masses[i] * (jy - 0.5 * ay - gy)
+            # Gravity alone: every centre's acceleration is 0.0 - g, as numpy's zeros give, so
+            # the forces are the chain's pulled ones (the pass back's sums) and only the
+            # torques turn with the pose.
+            force_x, force_y, pair_x, pair_y = tree.pulled((gx, gy))
+            hx, hy = self.hx, self.hy
+            torques, torque = [0.0] * n, -0.0
+            for i in range(n - 1, -1, -1):
+                torque += hx[i] * pair_y[i] - hy[i] * pair_x[i]
+                torques[i] = torque
+            return torques, force_x[:], force_y[:]
+        own_x, own_y = [0.0] * n, [0.0] * n
+        jx = jy = -0.0
+        for i in range(n):
+            x, y = lx[i], ly[i]
+            # The accelerations start from numpy's zeros, which alpha and omega add to.
+            if alpha is None:
+                ax = ay = 0.0
+            else:
+                ax, ay = 0.0 + alpha[i] * -y, 0.0 + alpha[i] * x
+            if omega is not None:
+                w = omega[i]
+                ax, ay = ax - w * w * x, ay - w * w * y
+            jx += ax
+            jy += ay
+            # Each joint accelerates with everything before it; each centre with half its
+            # link.
+            own_x[i] = masses[i] * (jx - 0.5 * ax - gx)
+            own_y[i] = masses[i] * (jy - 0.5 * ay - gy)
         return self._back(own_x, own_y, alpha)
 
     def turning(self, accelerations: list[float]) -> Loads:
@@ -261,22 +293,18 @@ class _ChainPose(FloatPose):
             jx[i], jy[i] = px, py
             cx, cy = px + hx[i], py + hy[i]
             mcx[i], mcy[i], mcc[i] = m * cx, m * cy, m * (cx * cx + cy * cy)
-        # Back: gravity's loads (every centre accelerates at -g), those plus the swing's, the
-        # inertia.
-        gx, gy = 0.0 - gravity[0], 0.0 - gravity[1]
-        hold_t, hold_x, hold_y = [0.0] * n, [0.0] * n, [0.0] * n
-        swing_t, inertia = [0.0] * n, [0.0] * n
+        # Back: gravity's loads (every centre accelerates at -g: only the torques depend on the
+        # pose), those plus the swing's, the inertia.
+        hold_x, hold_y, pair_x, pair_y = tree.pulled(gravity)
+        hold_t, swing_t, inertia = [0.0] * n, [0.0] * n, [0.0] * n
         mass_beyond, moment_beyond = tree.mass_beyond, tree.moment_beyond
-        gsx = gsy = g_torque = gbx = gby = -0.0
+        g_torque = -0.0
         ssx = ssy = s_torque = sbx = sby = -0.0
         first_x = first_y = second = -0.0
         for i in range(n - 1, -1, -1):
-            h_x, h_y, m = hx[i], hy[i], masses[i]
-            gsx += m * gx
-            gsy += m * gy
-            g_torque += h_x * (gsy + gby) - h_y * (gsx + gbx)
-            hold_t[i], hold_x[i], hold_y[i] = g_torque, gsx, gsy
-            gbx, gby = gsx, gsy
+            h_x, h_y, gsx, gsy = hx[i], hy[i], hold_x[i], hold_y[i]
+            g_torque += h_x * pair_y[i] - h_y * pair_x[i]
+            hold_t[i] = g_torque
             ssx += swing_x[i]
             ssy += swing_y[i]
             s_torque += h_x * (ssy + sby) - h_y * (ssx + sbx)
@@ -288,7 +316,8 @@ class _ChainPose(FloatPose):
             x, y = jx[i], jy[i]
             spread = second - 2.0 * (x * first_x + y * first_y) + mass_beyond[i] * (x * x + y * y)
             inertia[i] = moment_beyond[i] + (0.0 if 0.0 > spread else spread)
-        return (hold_t, hold_x, hold_y), (swing_t, swing_x, swing_y), inertia
+        # Copies of the kept forces: the loads returned are the caller's.
+        return (hold_t, hold_x[:], hold_y[:]), (swing_t, swing_x, swing_y), inertia
 
 
 def fit_floats(
@@ -365,18 +394,21 @@ def damped_rates(
     xs, ys = [], []
     x, y = base
     heading = base_angle
+    cos, sin = math.cos, math.sin
     for length, angle in zip(lengths, angles, strict=True):
         xs.append(x)
         ys.append(y)
         heading += angle
-        x += length * math.cos(heading)
-        y += length * math.sin(heading)
+        x += length * cos(heading)
+        y += length * sin(heading)
     # Column i of the Jacobian is the arm from joint i to the end, turned a quarter turn.
-    arms_x = [x - joint for joint in xs]
-    arms_y = [y - joint for joint in ys]
+    arms_x, arms_y = [], []
     a = d = damping
     b = 0.0
-    for ax, ay in zip(arms_x, arms_y, strict=True):
+    for joint_x, joint_y in zip(xs, ys, strict=True):
+        ax, ay = x - joint_x, y - joint_y
+        arms_x.append(ax)
+        arms_y.append(ay)
         a += ay * ay
         b -= ay * ax
         d += ax * ax

@@ -290,8 +290,9 @@ class Controller:
                 worst = over
         if worst > JUMP:
             return np.zeros(len(rates)), True
-        scale = 1.0 if worst <= 1.0 else worst
-        return np.array([rate / scale for rate in rates]), False
+        if worst <= 1.0:
+            return np.array(rates), False  # divided by 1.0, each rate is itself
+        return np.array([rate / worst for rate in rates]), False
 
     def _know_strain(self, gravity: tuple[float, float] | np.ndarray) -> None:
         """Tell a chain's solver what holding a pose still under ``gravity`` (px/s^2) takes of

@@ -137,6 +137,7 @@ class Servo:
         self._sections = inertia.count > SECTION_LINKS
         self._limits = self.max_torque.tolist()
         self._speeds = self.max_speed.tolist()
+        self._floors = [BRAKE_FLOOR * lim for lim in self._limits]
 
     @property
     def stalled(self) -> np.ndarray:
@@ -340,7 +341,8 @@ class Servo:
         toward = drive.saturated & (drive.loads.torques * error > 0.0)
         self._pushing, self._straining = toward | np.asarray(self._straining), toward
         budgets = np.maximum(self.max_torque - np.abs(drive.loads.torques), 0.0)
-        if not self._sections:
+        # A carried joint is at its limit: most ticks none is.
+        if not self._sections and drive.saturated.any():
             carried = _overrun(
                 self.inertia.parent_list,
                 drive.saturated.tolist(),
@@ -382,10 +384,14 @@ class Servo:
         # Each step as in command, with numpy's maximum, minimum and sign written out (the same
         # floats: a sign times a speed is the speed, its negation, zero or NaN).
         up, down, closing, carried, sides, weak_joints = [], [], [], [], [], []
-        floor_share, brake_share, stall_speed = BRAKE_FLOOR, BRAKE_SHARE, STALL_SPEED
+        brake_share, stall_speed = BRAKE_SHARE, STALL_SPEED
         stall_time, stall_load, sqrt = STALL_TIME, STALL_LOAD, math.sqrt
-        for lim, e, v, i, h, top, pushing, before, was_carried, was_stalled in zip(
+        # The sum of the closing speeds, and the time the first joint to stop needs to, at a
+        # constant deceleration, gathered on the way.
+        stop_in, closing_total = math.inf, 0.0
+        for lim, low, e, v, i, h, top, pushing, before, was_carried, was_stalled in zip(
             limits,
+            self._floors,
             errors,
             now,
             inertia,
@@ -401,7 +407,7 @@ class Servo:
             u = (0.0 if 0.0 > u else u) / i
             d = (0.0 if 0.0 > d else d) / i
             against = d if e > 0.0 else u
-            floor = floor_share * lim / i
+            floor = low / i
             brake = brake_share * (floor if floor > against else against)
             overloaded = not abs(h) <= lim
             if overloaded:
@@ -410,13 +416,14 @@ class Servo:
             down.append(d)
             # _sign(e), written out: this loop runs for every joint on every tick.
             side = 1.0 if e > 0.0 else -1.0 if e < 0.0 else 0.0 if e == 0.0 else e
-            load, speed_now = side * h, abs(v)
+            # The load (side * h) and the speed are worked out only where a stall is in question.
             if (
                 pushing
                 and v * e < 0.0
                 and (
-                    speed_now > (stall_speed if stall_speed > (slow := abs(before)) else slow)
-                    or (load > lim and speed_now > stall_speed)
+                    (speed_now := abs(v))
+                    > (stall_speed if stall_speed > (slow := abs(before)) else slow)
+                    or (side * h > lim and speed_now > stall_speed)
                 )
             ):
                 was_carried += dt
@@ -424,31 +431,29 @@ class Servo:
                 was_carried = 0.0
             carried.append(was_carried)
             is_stalled = (was_stalled != 0.0 and was_stalled == side) or (
-                was_carried >= stall_time and load >= stall_load * lim
+                was_carried >= stall_time and side * h >= stall_load * lim
             )
             # Those that gave their goal up, and those whose static load is past their limit,
             # give way at it rather than set the chain's one factor (see give_way).
             weak_joints.append(is_stalled or overloaded)
             sides.append(side if is_stalled else 0.0)
-            size = 0.0 if is_stalled else abs(e)
+            size = 0.0 if is_stalled else (distance := abs(e))
             by_gain = gain * size
             speed = by_gain if by_gain < top else top
             by_brake = sqrt(2.0 * brake * size)
             speed = by_brake if by_brake < speed else speed
             c = speed if e > 0.0 else -speed if e < 0.0 else 0.0 * speed if e == 0.0 else e
             closing.append(c)
-        self._carried, self._stalled, self._velocities = carried, sides, now
-        if together:
-            closing = _together(errors, closing)
-        # The sum of the closing speeds, and the time the first joint to stop needs to, at a
-        # constant deceleration.
-        stop_in, closing_total = math.inf, 0.0
-        for e, c in zip(errors, closing, strict=True):
             magnitude = abs(c)
             closing_total += magnitude
             if magnitude > 1e-9:
-                stop = 2.0 * abs(e) / magnitude
+                # (a stalled joint's closing speed is zero: its distance is not needed)
+                stop = 2.0 * distance / magnitude
                 stop_in = stop if stop < stop_in else stop_in
+        self._carried, self._stalled, self._velocities = carried, sides, now
+        if together:
+            closing = _together(errors, closing)
+            stop_in, closing_total = _stopping(errors, closing)
         # The loads of braking and of spinning are evaluated only when a bound on them (see
         # _Quiet) leaves any joint short of room: otherwise their factor is 1, exactly.
         quiet, factor = self._quiet, 1.0
@@ -503,7 +508,8 @@ class Servo:
             0.0 if 0.0 > (left := lim - abs(t)) else left
             for lim, t in zip(limits, torques, strict=True)
         ]
-        if not self._sections:
+        # A carried joint is at its limit: most ticks none is.
+        if not self._sections and any(saturated):
             carried = _overrun(
                 tree.parents, saturated, torques, now, errors, hard, push[0], held, limits, gain
             )
@@ -515,6 +521,20 @@ class Servo:
             forces=np.array((loads[1], loads[2])).T,
             budgets=np.array(budgets),
         )
+
+
+def _stopping(errors: list[float], closing: list[float]) -> tuple[float, float]:
+    """The time the first joint to stop needs to close its error (radians) from its
+    ``closing`` velocity (rad/s) at a constant deceleration (s; inf when none moves), and the
+    sum of the closing speeds."""
+    stop_in, closing_total = math.inf, 0.0
+    for e, c in zip(errors, closing, strict=True):
+        magnitude = abs(c)
+        closing_total += magnitude
+        if magnitude > 1e-9:
+            stop = 2.0 * abs(e) / magnitude
+            stop_in = stop if stop < stop_in else stop_in
+    return stop_in, closing_total
 
 
 def _together(errors: list[float], closing: list[float]) -> list[float]:
@@ -604,9 +624,6 @@ def _overrun(
     more needs its correction against the sag. Torques are in mass px^2/s^2, rates rad/s,
     angles radians; ``gain`` is the servo's, /s.
     """
-    if not any(saturated):
-        # A carried joint is at its limit: most ticks none is.
-        return [False] * len(parents)
     light = [abs(h) < STALL_LOAD * lim for h, lim in zip(held, limits, strict=True)]
     for j in range(len(parents) - 1, -1, -1):
         if parents[j] >= 0 and not light[j]:
