@@ -82,7 +82,7 @@ def joint_error(desired: np.ndarray, measured: np.ndarray, limited: np.ndarray) 
     return error
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, init=False)
 class Command:
     """One tick's decision: the solution and the motor rates it turned into.
 
@@ -95,6 +95,13 @@ class Command:
     solution: Solution
     rates: np.ndarray
     drive: ServoCommand | None = None
+
+    def __init__(
+        self, solution: Solution, rates: np.ndarray, drive: ServoCommand | None = None
+    ) -> None:
+        # Set in the instance's dict: a frozen dataclass's own __init__ goes through object.__setattr__ for each field, at several times the cost (a controller makes one every tick).
+        fields = self.__dict__
+        fields["solution"], fields["rates"], fields["drive"] = solution, rates, drive
 
 
 class Controller:
@@ -309,7 +316,7 @@ class Controller:
         if servo is None or not self.skeleton.is_chain or not any(pull):
             self.solver.strain = None
             return
-        self.solver.strain = lambda angles: servo.strain(self.skeleton.world_angles(angles), pull)
+        self.solver.strain = lambda angles: servo.strain(self._skeleton.world_angles(angles), pull)
 
     def hold(self, measured: np.ndarray) -> None:
         """Stop pushing: hold the ``measured`` pose (radians) instead of solving, until
@@ -392,7 +399,7 @@ class Controller:
             goal_rates,
             steered=steered,
             together=not steered
-            and float(np.abs(error).max()) > NEAR
+            and _far(error)
             and (self._weightless_way() or self._strained_way(solution, error)),
         )
         return Command(solution, drive.rates, drive)
@@ -597,6 +604,25 @@ class _Fresh:
     ticks: int = 0
     carried: bool = False
     strain: float | None = None
+
+
+def _far(error: np.ndarray) -> bool:
+    """True when some joint of ``error`` (radians) is more than :data:`NEAR` off its goal, and
+    none is NaN (``float(np.abs(error).max()) > NEAR``, as numpy's max carries a NaN).
+
+    >>> _far(np.array([0.01, -0.1])), _far(np.array([0.1, np.nan]))
+    (True, False)
+    """
+    if len(error) > FLOAT_LINKS:
+        return float(np.abs(error).max()) > NEAR
+    # Joint by joint over floats: numpy's calls cost more on a few joints.
+    far = False
+    for e in error.tolist():
+        if e != e:
+            return False
+        if abs(e) > NEAR:
+            far = True
+    return far
 
 
 def _moved(target: np.ndarray | TargetSet, last: np.ndarray | TargetSet | None) -> bool:

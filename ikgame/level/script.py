@@ -490,7 +490,9 @@ class ScriptRunner:
         (px, by name; a chain may pass its tip's position alone)."""
         if self._run is None:
             return
-        if not isinstance(effectors, Mapping):
+        # An array (a chain's tip, every tick) is told apart first: asking the Mapping ABC
+        # costs more.
+        if isinstance(effectors, np.ndarray) or not isinstance(effectors, Mapping):
             if self._default is None:
                 raise ValueError(
                     f"this script moves several effectors ({', '.join(self.effectors)}); "

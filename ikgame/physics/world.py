@@ -18,6 +18,7 @@ Angles are radians, lengths px, times s, world y up.
 from __future__ import annotations
 
 import math
+import struct
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Final
 
@@ -81,6 +82,9 @@ _LOCAL_TO_WORLD: Final = _chipmunk.lib.cpBodyLocalToWorld
 _GRAVITY: Final = _chipmunk.lib.cpSpaceGetGravity
 """What ``Body.local_to_world`` and ``Space.gravity`` call, without pymunk's ``Vec2d`` around
 the answer."""
+
+_AT_LIMIT: Final = 1.0 - 1e-6
+"""Share of its torque limit past which a joint counts as at its limit."""
 
 _BRACE_RAD: Final = 1e-9
 """How far beyond a braced joint's angle (back into its range) its stop is set, radians: pymunk
@@ -288,6 +292,8 @@ class World:
             (self.bodies[i]._body, (self._halves[i], 0.0)) for i in self.effector_links.tolist()
         ]
         self._stops = _Stops(self.limit_joints, self.max_speed)
+        self._at_limit = (self.max_torque * _AT_LIMIT).tolist()
+        """The torque past which each joint counts as at its limit (see :meth:`torque_limited`)."""
 
     @property
     def count(self) -> int:
@@ -439,7 +445,9 @@ class World:
             fx, fy = f[-1]
             hx, hy = halves[-1] * cos[-1], halves[-1] * sin[-1]
             values += fx, fy, t[-1] - (hx * fy - hy * fx)
-            loads[rows.links].reshape(-1)[:] = values  # a view: the links are consecutive rows
+            # Packed straight into the links' rows (consecutive): numpy converts a list of
+            # floats one by one, at twice the cost.
+            rows.link_rows.pack_into(loads, rows.link_offset, *values)
             feed_forward = t
         elif rows.consecutive:
             hx, hy = self._halves_array * np.cos(angles), self._halves_array * np.sin(angles)
@@ -494,14 +502,10 @@ class World:
 
     def torque_limited(self) -> np.ndarray:
         """(n,) bool: which joints were at their torque limit during the last step."""
-        share = 1.0 - 1e-6
         if self._compiled is not None:
-            return self._applied_compiled(*self._compiled) >= self.max_torque * share
+            return self._applied_compiled(*self._compiled) >= self.max_torque * _AT_LIMIT
         return np.array(
-            [
-                torque >= limit * share
-                for torque, limit in zip(self._applied(), self.max_torque.tolist(), strict=True)
-            ]
+            [torque >= at for torque, at in zip(self._applied(), self._at_limit, strict=True)]
         )
 
     def _applied(self) -> list[float]:
@@ -724,6 +728,10 @@ class _Rows:
         self.hanging_parents = np.array([parents[i] for i in hanging], dtype=int)
         self.loads = np.zeros((count, 3))
         """Force x, y and torque per row, written to the space each tick."""
+        self.link_rows = struct.Struct(f"{3 * len(links)}d")
+        """Packs the links' rows (x, y, torque per link) into :attr:`loads` at
+        :attr:`link_offset`, for consecutive rows."""
+        self.link_offset = first * self.loads.strides[0]
         self.writes = pymunk.batch.Buffer()
         self.writes.set_float_buf(self.loads)
         self._write_request = _batch_request(self.writes, _LOADS)
