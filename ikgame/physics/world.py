@@ -286,6 +286,7 @@ class World:
         self._read_state: np.ndarray | None = None
         self._read_at: object = None
         self._rows: _Rows | None = None
+        self._views: _Views | None = None
         self._link_angles: np.ndarray | None = None
         self._joints: tuple[np.ndarray, np.ndarray] | None = None
         self._effector_ends = [
@@ -330,12 +331,15 @@ class World:
         [[0.0], [0.0]]
         """
         state, rows = self._state()
-        links, parents = state[rows.links], state[rows.parents]
+        columns = self._views.columns
+        if columns is None:
+            columns = _columns(state, rows)
+        angles, parent_angles, rates, parent_rates = columns
         # The tick's drive applies its loads along the links as read here (a copy: the read's
         # buffer is reused).
-        self._link_angles = links[:, 2].copy()
+        self._link_angles = angles.copy()
         # So does the step's bracing of the stops (nothing moves the bodies in between).
-        self._joints = (links[:, 2] - parents[:, 2], links[:, 3] - parents[:, 3])
+        self._joints = (angles - parent_angles, rates - parent_rates)
         return self._joints
 
     def _state(self) -> tuple[np.ndarray, _Rows]:
@@ -345,15 +349,17 @@ class World:
         floats.num = 0
         _EACH_BODY(self._cp_space, _GET_BODIES, self._read_request)
         # The read fills the same memory each time while the space keeps its bodies: the array
-        # over it is made again only when it moved or changed size.
+        # over it, and the views of it a tick takes, are made again only when it moved or
+        # changed size (and with it, the rows, when the number of bodies changed).
         state = self._read_state
         if state is None or floats.arr != self._read_at or floats.num != state.size:
             self._read_at = floats.arr
             state = self._read_state = np.frombuffer(self._reads.float_buf()).reshape(-1, 4)
-        rows = self._rows
-        if rows is None or rows.count != len(state):
-            rows = self._rows = _Rows(self, len(state))
-        return state, rows
+            rows = self._rows
+            if rows is None or rows.count != len(state):
+                rows = self._rows = _Rows(self, len(state))
+            self._views = _Views(state, rows)
+        return state, self._rows
 
     def joint_positions(self) -> np.ndarray:
         """World positions of the joints, px: for a chain (n + 1, 2), joint 0 .. joint n-1 then
@@ -433,16 +439,18 @@ class World:
             # A short chain, link by link over floats (numpy's calls cost more than its sums):
             # the same operations as the arrays below.
             cos, sin = np.cos(angles).tolist(), np.sin(angles).tolist()
-            t, f, halves = torques.tolist(), forces.tolist(), self._halves
+            t, halves = torques.tolist(), self._halves
+            # The x and y columns as two lists (the servo's forces are a transposed (2, n)).
+            f_x, f_y = forces.T.tolist()
             values: list[float] = []
             # Each link but the last, with the joint at its end (zip stops one short).
-            for (fx, fy), (next_x, next_y), torque, next_t, h, c, s in zip(
-                f, f[1:], t, t[1:], halves, cos, sin, strict=False
+            for fx, next_x, fy, next_y, torque, next_t, h, c, s in zip(
+                f_x, f_x[1:], f_y, f_y[1:], t, t[1:], halves, cos, sin, strict=False
             ):
                 pair_x, pair_y = fx + next_x, fy + next_y
                 hx, hy = h * c, h * s
                 values += fx - next_x, fy - next_y, (torque - next_t) - (hx * pair_y - hy * pair_x)
-            fx, fy = f[-1]
+            fx, fy = f_x[-1], f_y[-1]
             hx, hy = halves[-1] * cos[-1], halves[-1] * sin[-1]
             values += fx, fy, t[-1] - (hx * fy - hy * fx)
             # Packed straight into the links' rows (consecutive): numpy converts a list of
@@ -651,9 +659,9 @@ class World:
 
         A blow-up shows in positions within a tick or two, so velocities are not read.
         """
-        state, _ = self._state()
+        self._state()
         # NaN fails the comparison too.
-        return not float(np.abs(state[:, :3]).max()) < DIVERGENCE_LIMIT
+        return not float(np.abs(self._views.poses).max()) < DIVERGENCE_LIMIT
 
     def divergence(self) -> str | None:
         """The first body that blew up (``"link 3"``, ``"prop 2"``, ``"base"``; counting from
@@ -745,6 +753,25 @@ class _Rows:
         floats.num = size
 
 
+def _columns(
+    state: np.ndarray, rows: _Rows
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The links' angles, their parents', the links' angular velocities and their parents', from
+    a read of every body."""
+    links, parents = state[rows.links], state[rows.parents]
+    return links[:, 2], parents[:, 2], links[:, 3], parents[:, 3]
+
+
+class _Views:
+    """What a tick takes of one read's array, as views of it: every body's pose (x, y, angle)
+    and, for links in consecutive rows, their :func:`_columns` (else None: rows picked by index
+    are copies, taken from each read afresh)."""
+
+    def __init__(self, state: np.ndarray, rows: _Rows) -> None:
+        self.poses = state[:, :3]
+        self.columns = _columns(state, rows) if rows.consecutive else None
+
+
 class _Stops:
     """The joints' limits, braced against a joint knocked toward one.
 
@@ -795,10 +822,14 @@ class _Stops:
             joints = {i: joints[i] for i in np.flatnonzero(knocked).tolist() if i in joints}
         braced = []
         for i, joint in joints.items():
-            angle, rate = a[i], v[i]
+            rate = v[i]
+            # Most joints turn within their speed limit, and those are never braced: asked first.
+            if not abs(rate) > speeds[i]:
+                continue
+            angle = a[i]
             ahead = angle + twice * rate
             low = ahead < lower[i]
-            if not (low or ahead > upper[i]) or not abs(rate) > speeds[i]:
+            if not (low or ahead > upper[i]):
                 continue
             moved = angle + dt * rate
             # A joint already past its stop is the limit joint's to push back, not to brace;
