@@ -399,7 +399,7 @@ class Controller:
             goal_rates,
             steered=steered,
             together=not steered
-            and _far(error)
+            and _largest(error) > NEAR
             and (self._weightless_way() or self._strained_way(solution, error)),
         )
         return Command(solution, drive.rates, drive)
@@ -488,7 +488,7 @@ class Controller:
         strain = self.solver.strain
         if strain is None or servo is None or not servo.any_stalled:
             return False
-        if float(np.abs(velocities).max()) > SETTLING:
+        if _largest(velocities) > SETTLING:
             return False
         goal = solution.angles
         return strain(goal) <= STRAINED and holds_along(strain, goal - error, error)
@@ -512,7 +512,7 @@ class Controller:
             and self._ik_rate is not None
             and solution.status is SolveStatus.SUCCESS
             and (avoider is None or avoider.idle)
-            and float(np.abs(solution.angles - start).max()) <= NEAR
+            and _largest(solution.angles - start) <= NEAR
         )
         self._fresh = _Fresh(solution, solution.angles) if settled else None
         return solution
@@ -606,23 +606,23 @@ class _Fresh:
     strain: float | None = None
 
 
-def _far(error: np.ndarray) -> bool:
-    """True when some joint of ``error`` (radians) is more than :data:`NEAR` off its goal, and
-    none is NaN (``float(np.abs(error).max()) > NEAR``, as numpy's max carries a NaN).
+def _largest(values: np.ndarray) -> float:
+    """``float(np.abs(values).max())``: the largest magnitude, NaN if any is NaN.
 
-    >>> _far(np.array([0.01, -0.1])), _far(np.array([0.1, np.nan]))
-    (True, False)
+    >>> _largest(np.array([0.01, -0.1])), _largest(np.array([0.1, np.nan]))
+    (0.1, nan)
     """
-    if len(error) > FLOAT_LINKS:
-        return float(np.abs(error).max()) > NEAR
+    if len(values) > FLOAT_LINKS:
+        return float(np.abs(values).max())
     # Joint by joint over floats: numpy's calls cost more on a few joints.
-    far = False
-    for e in error.tolist():
-        if e != e:
-            return False
-        if abs(e) > NEAR:
-            far = True
-    return far
+    largest = 0.0
+    for value in values.tolist():
+        size = abs(value)
+        if size != size:
+            return size
+        if size > largest:
+            largest = size
+    return largest
 
 
 def _moved(target: np.ndarray | TargetSet, last: np.ndarray | TargetSet | None) -> bool:
