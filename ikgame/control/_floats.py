@@ -275,8 +275,7 @@ class _ChainPose(FloatPose):
         n = tree.count
         lx, ly, hx, hy, masses = self.lx, self.ly, self.hx, self.hy, tree.masses
         # Out: the swing's joint accelerations, and the joints' places for the inertia.
-        swing_x, swing_y = [0.0] * n, [0.0] * n
-        jx, jy, mcx, mcy, mcc = [0.0] * n, [0.0] * n, [0.0] * n, [0.0] * n, [0.0] * n
+        swing_x, swing_y, jx, jy = [0.0] * n, [0.0] * n, [0.0] * n, [0.0] * n
         w = ax_sum = ay_sum = ex = ey = -0.0
         for i in range(n):
             x, y, m = lx[i], ly[i], masses[i]
@@ -289,10 +288,7 @@ class _ChainPose(FloatPose):
             swing_x[i], swing_y[i] = m * (ax_sum - 0.5 * ax), m * (ay_sum - 0.5 * ay)
             ex += x
             ey += y
-            px, py = ex - x, ey - y
-            jx[i], jy[i] = px, py
-            cx, cy = px + hx[i], py + hy[i]
-            mcx[i], mcy[i], mcc[i] = m * cx, m * cy, m * (cx * cx + cy * cy)
+            jx[i], jy[i] = ex - x, ey - y
         # Back: gravity's loads (every centre accelerates at -g: only the torques depend on the
         # pose), those plus the swing's, the inertia.
         hold_x, hold_y, pair_x, pair_y = tree.pulled(gravity)
@@ -310,10 +306,12 @@ class _ChainPose(FloatPose):
             s_torque += h_x * (ssy + sby) - h_y * (ssx + sbx)
             swing_t[i], swing_x[i], swing_y[i] = g_torque + s_torque, gsx + ssx, gsy + ssy
             sbx, sby = ssx, ssy
-            first_x += mcx[i]
-            first_y += mcy[i]
-            second += mcc[i]
-            x, y = jx[i], jy[i]
+            # The link's centre and its mass moments, summed from the tip.
+            x, y, m = jx[i], jy[i], masses[i]
+            cx, cy = x + h_x, y + h_y
+            first_x += m * cx
+            first_y += m * cy
+            second += m * (cx * cx + cy * cy)
             spread = second - 2.0 * (x * first_x + y * first_y) + mass_beyond[i] * (x * x + y * y)
             inertia[i] = moment_beyond[i] + (0.0 if 0.0 > spread else spread)
         # Copies of the kept forces: the loads returned are the caller's.
