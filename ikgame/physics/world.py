@@ -293,7 +293,7 @@ class World:
             (self.bodies[i]._body, (self._halves[i], 0.0)) for i in self.effector_links.tolist()
         ]
         self._stops = _Stops(self.limit_joints, self.max_speed)
-        self._at_limit = (self.max_torque * _AT_LIMIT).tolist()
+        self._at_limit = self.max_torque * _AT_LIMIT
         """The torque past which each joint counts as at its limit (see :meth:`torque_limited`)."""
 
     @property
@@ -511,10 +511,8 @@ class World:
     def torque_limited(self) -> np.ndarray:
         """(n,) bool: which joints were at their torque limit during the last step."""
         if self._compiled is not None:
-            return self._applied_compiled(*self._compiled) >= self.max_torque * _AT_LIMIT
-        return np.array(
-            [torque >= at for torque, at in zip(self._applied(), self._at_limit, strict=True)]
-        )
+            return self._applied_compiled(*self._compiled) >= self._at_limit
+        return np.array(self._applied()) >= self._at_limit
 
     def _applied(self) -> list[float]:
         """:meth:`motor_torques` as floats (a tick asks for them joint by joint)."""
