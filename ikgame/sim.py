@@ -49,7 +49,7 @@ __all__ = ["Simulation", "RunResult", "TickInfo", "run_level"]
 Status = Literal["passed", "failed", "diverged"]
 
 
-@dataclass(frozen=True, eq=False, init=False)
+@dataclass(frozen=True, eq=False)
 class TickInfo:
     """Telemetry of one tick, for logging or plotting.
 
@@ -77,23 +77,6 @@ class TickInfo:
     error: float
     torque_limited: np.ndarray
     errors: np.ndarray = field(default_factory=lambda: np.zeros(0))
-
-    def __init__(
-        self,
-        tick: int,
-        time: float,
-        solver_status: str,
-        iterations: int,
-        error: float,
-        torque_limited: np.ndarray,
-        errors: np.ndarray | None = None,
-    ) -> None:
-        # Set in the instance's dict: a frozen dataclass's own __init__ goes through object.__setattr__ for each field, at several times the cost (a simulation makes one every tick).
-        fields = self.__dict__
-        fields["tick"], fields["time"], fields["solver_status"] = tick, time, solver_status
-        fields["iterations"], fields["error"] = iterations, error
-        fields["torque_limited"] = torque_limited
-        fields["errors"] = np.zeros(0) if errors is None else errors
 
 
 @dataclass(frozen=True)

@@ -82,7 +82,7 @@ def joint_error(desired: np.ndarray, measured: np.ndarray, limited: np.ndarray) 
     return error
 
 
-@dataclass(frozen=True, eq=False, init=False)
+@dataclass(frozen=True, eq=False)
 class Command:
     """One tick's decision: the solution and the motor rates it turned into.
 
@@ -95,13 +95,6 @@ class Command:
     solution: Solution
     rates: np.ndarray
     drive: ServoCommand | None = None
-
-    def __init__(
-        self, solution: Solution, rates: np.ndarray, drive: ServoCommand | None = None
-    ) -> None:
-        # Set in the instance's dict: a frozen dataclass's own __init__ goes through object.__setattr__ for each field, at several times the cost (a controller makes one every tick).
-        fields = self.__dict__
-        fields["solution"], fields["rates"], fields["drive"] = solution, rates, drive
 
 
 class Controller:

@@ -75,7 +75,7 @@ BRAKE_SHARE: Final = 0.5
 for the other joints moving at the same time, which the one-joint inertia does not see."""
 
 
-@dataclass(frozen=True, eq=False, init=False)
+@dataclass(frozen=True, eq=False)
 class ServoCommand:
     """What the servo asks of the world for one tick.
 
@@ -91,14 +91,6 @@ class ServoCommand:
     torques: np.ndarray
     forces: np.ndarray
     budgets: np.ndarray
-
-    def __init__(
-        self, rates: np.ndarray, torques: np.ndarray, forces: np.ndarray, budgets: np.ndarray
-    ) -> None:
-        # Set in the instance's dict: a frozen dataclass's own __init__ goes through object.__setattr__ for each field, at several times the cost (a servo makes one every tick).
-        fields = self.__dict__
-        fields["rates"], fields["torques"] = rates, torques
-        fields["forces"], fields["budgets"] = forces, budgets
 
 
 class Servo:

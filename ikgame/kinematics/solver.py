@@ -37,7 +37,7 @@ class SolveStatus(Enum):
     """The solver can get no closer (for example, the target is out of reach)."""
 
 
-@dataclass(frozen=True, eq=False, init=False)
+@dataclass(frozen=True, eq=False)
 class Solution:
     """Desired local joint angles and how the solve went.
 
@@ -59,19 +59,6 @@ class Solution:
     iterations: int
     error: float
     errors: np.ndarray | None = None
-
-    def __init__(
-        self,
-        angles: np.ndarray,
-        status: SolveStatus,
-        iterations: int,
-        error: float,
-        errors: np.ndarray | None = None,
-    ) -> None:
-        # Set in the instance's dict: a frozen dataclass's own __init__ goes through object.__setattr__ for each field, at several times the cost (a controller makes one every tick).
-        fields = self.__dict__
-        fields["angles"], fields["status"], fields["iterations"] = angles, status, iterations
-        fields["error"], fields["errors"] = error, errors
 
 
 class Solver(Protocol):

@@ -72,12 +72,6 @@ _IMPULSE: Final = _chipmunk.lib.cpConstraintGetImpulse
 """Chipmunk's own motor setters and getter, called per motor each tick on the motors' C structs
 (what pymunk's properties call, without a Python call in between: half the cost on a long
 chain)."""
-_EACH_BODY: Final = _chipmunk.lib.cpSpaceEachBody
-_GET_BODIES: Final = _chipmunk.ffi.addressof(_chipmunk.lib, "pmSpaceBodyGetIteratorFuncBatched")
-_SET_BODIES: Final = _chipmunk.ffi.addressof(_chipmunk.lib, "pmSpaceBodySetIteratorFuncBatched")
-"""What ``pymunk.batch.get_space_bodies`` and ``set_space_bodies`` call, called with a request
-built once per world (see :func:`_batch_request`): a short chain's tick spent more on building
-the request every time than on the read or the write."""
 _LOCAL_TO_WORLD: Final = _chipmunk.lib.cpBodyLocalToWorld
 _GRAVITY: Final = _chipmunk.lib.cpSpaceGetGravity
 """What ``Body.local_to_world`` and ``Space.gravity`` call, without pymunk's ``Vec2d`` around
@@ -282,11 +276,7 @@ class World:
         self._feed_forward: list[float] | np.ndarray = [0.0] * self.count
         self._cp_space = self.space._space  # the C space, for chipmunk's own calls
         self._reads = pymunk.batch.Buffer()
-        self._read_request = _batch_request(self._reads, _STATE)
-        self._read_state: np.ndarray | None = None
-        self._read_at: object = None
         self._rows: _Rows | None = None
-        self._views: _Views | None = None
         self._link_angles: np.ndarray | None = None
         self._joints: tuple[np.ndarray, np.ndarray] | None = None
         self._effector_ends = [
@@ -331,35 +321,25 @@ class World:
         [[0.0], [0.0]]
         """
         state, rows = self._state()
-        columns = self._views.columns
-        if columns is None:
-            columns = _columns(state, rows)
-        angles, parent_angles, rates, parent_rates = columns
+        links, parents = state[rows.links], state[rows.parents]
         # The tick's drive applies its loads along the links as read here (a copy: the read's
         # buffer is reused).
-        self._link_angles = angles.copy()
+        self._link_angles = links[:, 2].copy()
         # So does the step's bracing of the stops (nothing moves the bodies in between).
-        self._joints = (angles - parent_angles, rates - parent_rates)
+        self._joints = (links[:, 2] - parents[:, 2], links[:, 3] - parents[:, 3])
         return self._joints
 
     def _state(self) -> tuple[np.ndarray, _Rows]:
         """Every body's x, y, angle and angular velocity in one read (a view of a buffer the
         next read reuses), and which rows are whose."""
-        floats = self._reads._float_arr
-        floats.num = 0
-        _EACH_BODY(self._cp_space, _GET_BODIES, self._read_request)
-        # The read fills the same memory each time while the space keeps its bodies: the array
-        # over it, and the views of it a tick takes, are made again only when it moved or
-        # changed size (and with it, the rows, when the number of bodies changed).
-        state = self._read_state
-        if state is None or floats.arr != self._read_at or floats.num != state.size:
-            self._read_at = floats.arr
-            state = self._read_state = np.frombuffer(self._reads.float_buf()).reshape(-1, 4)
-            rows = self._rows
-            if rows is None or rows.count != len(state):
-                rows = self._rows = _Rows(self, len(state))
-            self._views = _Views(state, rows)
-        return state, self._rows
+        batch = self._reads
+        batch.clear()
+        pymunk.batch.get_space_bodies(self.space, _STATE, batch)
+        state = np.frombuffer(batch.float_buf()).reshape(-1, 4)
+        rows = self._rows
+        if rows is None or rows.count != len(state):
+            rows = self._rows = _Rows(self, len(state))
+        return state, rows
 
     def joint_positions(self) -> np.ndarray:
         """World positions of the joints, px: for a chain (n + 1, 2), joint 0 .. joint n-1 then
@@ -479,7 +459,7 @@ class World:
         compiled = self._compiled
         if compiled is not None:
             self._feed_forward = np.array(torques, dtype=float)
-            rows.write(self._cp_space)
+            pymunk.batch.set_space_bodies(self.space, _LOADS, rows.writes)
             # The same calls as the loops below, in the same order, with the same floats.
             motors, returns = compiled
             shares = 0.5 * np.asarray(budgets, dtype=float)
@@ -489,7 +469,7 @@ class World:
         if feed_forward is None:
             feed_forward = np.asarray(torques, dtype=float).tolist()
         self._feed_forward = feed_forward
-        rows.write(self._cp_space)
+        pymunk.batch.set_space_bodies(self.space, _LOADS, rows.writes)
         wanted, shares = rates.tolist(), budgets.tolist()
         if self._returns:
             shares = [0.5 * b for b in shares]
@@ -657,9 +637,9 @@ class World:
 
         A blow-up shows in positions within a tick or two, so velocities are not read.
         """
-        self._state()
+        state, _ = self._state()
         # NaN fails the comparison too.
-        return not float(np.abs(self._views.poses).max()) < DIVERGENCE_LIMIT
+        return not float(np.abs(state[:, :3]).max()) < DIVERGENCE_LIMIT
 
     def divergence(self) -> str | None:
         """The first body that blew up (``"link 3"``, ``"prop 2"``, ``"base"``; counting from
@@ -683,17 +663,6 @@ def _apart(skeleton: Skeleton) -> np.ndarray:
     parents = skeleton.parents
     siblings = parents[:, None] == parents[None, :]
     return ~(related | siblings)
-
-
-def _batch_request(buffer: pymunk.batch.Buffer, fields: pymunk.batch.BodyFields) -> object:
-    """The request ``pymunk.batch`` builds for every read or write of ``fields`` of every body
-    through ``buffer``, built once: it points at the buffer's arrays, which stay where they are
-    (their contents move, not the arrays)."""
-    request = _chipmunk.ffi.new("pmBatchedData *")
-    request.fields = fields.value
-    request.floatArray = buffer._float_arr
-    request.intArray = buffer._int_arr
-    return request
 
 
 def _direction(angle: float) -> np.ndarray:
@@ -740,34 +709,6 @@ class _Rows:
         self.link_offset = first * self.loads.strides[0]
         self.writes = pymunk.batch.Buffer()
         self.writes.set_float_buf(self.loads)
-        self._write_request = _batch_request(self.writes, _LOADS)
-
-    def write(self, space: object) -> None:
-        """Give every body of the chipmunk ``space`` its row of :attr:`loads` (what
-        ``pymunk.batch.set_space_bodies`` does)."""
-        floats = self.writes._float_arr
-        size, floats.num = floats.num, 0  # the write walks the rows from the first
-        _EACH_BODY(space, _SET_BODIES, self._write_request)
-        floats.num = size
-
-
-def _columns(
-    state: np.ndarray, rows: _Rows
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """The links' angles, their parents', the links' angular velocities and their parents', from
-    a read of every body."""
-    links, parents = state[rows.links], state[rows.parents]
-    return links[:, 2], parents[:, 2], links[:, 3], parents[:, 3]
-
-
-class _Views:
-    """What a tick takes of one read's array, as views of it: every body's pose (x, y, angle)
-    and, for links in consecutive rows, their :func:`_columns` (else None: rows picked by index
-    are copies, taken from each read afresh)."""
-
-    def __init__(self, state: np.ndarray, rows: _Rows) -> None:
-        self.poses = state[:, :3]
-        self.columns = _columns(state, rows) if rows.consecutive else None
 
 
 class _Stops:
