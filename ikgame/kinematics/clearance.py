@@ -188,6 +188,11 @@ RELEASE_CALLS: Final = 120
 """Calls at rest on a clear goal after which the solver answers again even short of the target
 (half a second at 240 ticks/s)."""
 
+PINNED_CALLS: Final = 24
+"""Calls a chain rests pressed into an obstacle, off its route, before a route on is planned
+from there (a tenth of a second at 240 ticks/s; the simulation judges a chain blocked after
+half a second without progress)."""
+
 JAMMED_WORK: Final = 150_000
 """Most units of work a search spends on a route to the clear pose nearest a target that no
 clear pose reaches (see :class:`Avoider`) before it settles for one nearer the chain: the
@@ -1423,7 +1428,8 @@ class Avoider:
     found at all, the solver's own solution is returned for that target: the chain behaves as
     without obstacles (and a jammed one is reported blocked). With ``replan``, a chain the motors carried
     off the planned line, whose straight way on to its via pose is blocked from where it is, gets a
-    new route from there. While the base moves (its :attr:`clearance`'s skeleton is another
+    new route from there; without it, only one that rests there with a link pressed into an
+    obstacle (see ``PINNED_CALLS``). While the base moves (its :attr:`clearance`'s skeleton is another
     one each call) nothing is planned, and the solver's answers are handed on until they bring
     a link within ``ACTIVE`` px of the margin of an obstacle nearer it: from then on, until no
     link is that near, the pose commanded the call before is polished onto the target for where
@@ -1498,6 +1504,10 @@ class Avoider:
         self._jammed = False
         self._resting = 0
         self._rest_misses = np.zeros(0)
+        # Where the chain came to rest with a link pressed into an obstacle, and for how many
+        # calls it has stayed there (see _pinned).
+        self._pin: np.ndarray | None = None
+        self._pinned_calls = 0
         self._line: tuple[np.ndarray, np.ndarray, float] | None = None
         self._checked: tuple[np.ndarray, np.ndarray] | None = None
         self._search: _Search | None = None
@@ -1570,7 +1580,9 @@ class Avoider:
         search = self._search
         if search is None and self._goal is not None and key == self._target:
             if not self._arrived(measured, target):
-                if not self.replan or self._clear_way(measured, self._way[0]):
+                if not (self.replan or self._pinned(measured)) or self._clear_way(
+                    measured, self._way[0]
+                ):
                     return self._follow(measured, solution)
                 # The motors left the planned line (joints at their speed or torque limits at
                 # different times) and the way on from here is blocked: plan again from here.
@@ -1847,6 +1859,19 @@ class Avoider:
         if self._resting < RELEASE_CALLS:
             return False
         return bool(np.any(misses > self._tolerance))
+
+    def _pinned(self, measured: np.ndarray) -> bool:
+        """Whether the chain has rested (within ``SETTLED`` on every joint) for ``PINNED_CALLS``
+        calls with a link pressed into an obstacle: the motors carried it off the planned line
+        into one, and it stays there. A link that brushes an obstacle on its way along the
+        line (a long chain low over the floor) moves on, and keeps its route."""
+        if self.clearance.gaps(measured).min() >= 0.0:
+            self._pin = None
+            return False
+        if self._pin is None or np.abs(measured - self._pin).max() > SETTLED:
+            self._pin, self._pinned_calls = measured.copy(), 0
+        self._pinned_calls += 1
+        return self._pinned_calls >= PINNED_CALLS
 
     def _clear_way(self, measured: np.ndarray, pose: np.ndarray) -> bool:
         """Whether the straight line from ``measured`` to ``pose`` is clear.

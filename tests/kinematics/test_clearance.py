@@ -16,6 +16,7 @@ from ikgame.kinematics import (
 from ikgame.kinematics.clearance import (
     ITERATION_UNITS,
     LEAD,
+    PINNED_CALLS,
     SEARCH_BUDGET,
     SLIDE_ROOM,
     SLIDE_STEP,
@@ -905,14 +906,21 @@ def test_a_set_out_of_joint_reach_settles_clear_but_not_through_the_floor():
     assert room.clear_answer(RAISED, RAISED, under_the_floor, 0.5) is None
 
 
-@pytest.mark.parametrize("replan", [False, True])
-def test_with_replan_a_chain_carried_off_its_route_gets_a_new_one_from_where_it_is(replan):
+def _shelf_route(replan: bool = False) -> tuple[Clearance, Avoider, Solution, np.ndarray]:
+    """The shelf room, an avoider (with ``replan`` or not) that has planned a route in under
+    the shelf from the arm held up, the solver's answer and the target."""
     room = _shelf_room()
     guide = Avoider(room, replan=replan)
     target = np.array([290.0, 45.0])
     through = Solution(np.array([-0.3, -1.2, -0.6]), SolveStatus.SUCCESS, 10, 0.0)
     while guide.steer(np.array([0.5, 0.3, 0.2]), through, target, 0.5) and guide.planning:
         pass
+    return room, guide, through, target
+
+
+@pytest.mark.parametrize("replan", [False, True])
+def test_with_replan_a_chain_carried_off_its_route_gets_a_new_one_from_where_it_is(replan):
+    room, guide, through, target = _shelf_route(replan)
     # Carried off the line, reaching in under the shelf: straight on to the via pose (the arm
     # folded up on the left) it would sweep through the shelf.
     off = np.array([0.0, -1.8, 0.0])
@@ -922,6 +930,34 @@ def test_with_replan_a_chain_carried_off_its_route_gets_a_new_one_from_where_it_
         assert np.array_equal(command.angles, off)
         command = guide.steer(off, through, target, 0.5)
     assert room.path_clear(off, command.angles) is replan
+
+
+@pytest.mark.parametrize("pressed", [False, True])
+def test_a_chain_pinned_against_an_obstacle_off_its_route_gets_a_new_one(pressed):
+    room, guide, through, target = _shelf_route()
+    first = guide._way[0].copy()
+    # Off the line, the straight way on to the via pose blocked either way; pressed, the last
+    # link lies 1.6 px into the shelf, where the motors hold it.
+    off = np.array([0.3, -1.85, 0.0]) if pressed else np.array([0.0, -1.8, 0.0])
+    assert bool(room.gaps(off).min() < 0.0) is pressed
+    for _ in range(PINNED_CALLS - 1):
+        guide.steer(off, through, target, 0.5)
+    assert np.array_equal(guide._way[0], first)  # it may yet move on
+    guide.steer(off, through, target, 0.5)
+    while guide.planning:
+        guide.steer(off, through, target, 0.5)
+    assert np.array_equal(guide._way[0], first) is not pressed
+
+
+def test_a_chain_brushing_an_obstacle_on_its_way_keeps_its_route():
+    room, guide, through, target = _shelf_route()
+    first = guide._way[0].copy()
+    # Pressed into the shelf, but moving: a link dragged along it.
+    for k in range(3 * PINNED_CALLS):
+        off = np.array([0.3, -1.85, 0.0 + 0.02 * (k % 2)])
+        assert room.gaps(off).min() < 0.0
+        guide.steer(off, through, target, 0.5)
+    assert np.array_equal(guide._way[0], first)
 
 
 def _settle(guide: Avoider, measured: np.ndarray, answer: Solution, target: np.ndarray) -> list:
