@@ -1426,11 +1426,11 @@ class Avoider:
     draws it to from where it is, and kept there (:attr:`jammed`): it rests held off the
     obstacle, where the solver's answer would press it in. When no clear pose or no route is
     found at all, the solver's own solution is returned for that target: the chain behaves as
-    without obstacles (and a jammed one is reported blocked). With ``replan``, a chain the motors carried
-    off the planned line, whose straight way on to its via pose is blocked from where it is, gets a
-    new route from there; without it, only one that rests there with a link pressed into an
-    obstacle (see ``PINNED_CALLS``). While the base moves (its :attr:`clearance`'s skeleton is another
-    one each call) nothing is planned, and the solver's answers are handed on until they bring
+    without obstacles (and a jammed one is reported blocked). With ``replan``, a chain the
+    motors carried off the planned line, whose straight way on to its via pose is blocked from
+    where it is, gets a new route from there; without it, only one that rests there with a link
+    pressed into an obstacle (see ``PINNED_CALLS``). While the base moves (its
+    :attr:`clearance`'s skeleton is another one each call) nothing is planned, and the solver's answers are handed on until they bring
     a link within ``ACTIVE`` px of the margin of an obstacle nearer it: from then on, until no
     link is that near, the pose commanded the call before is polished onto the target for where
     the base is now (``HOLD_OFF_ITERATIONS`` iterations at most), so the links near it come no
