@@ -1430,11 +1430,11 @@ class Avoider:
     motors carried off the planned line, whose straight way on to its via pose is blocked from
     where it is, gets a new route from there; without it, only one that rests there with a link
     pressed into an obstacle (see ``PINNED_CALLS``). While the base moves (its
-    :attr:`clearance`'s skeleton is another one each call) nothing is planned, and the solver's answers are handed on until they bring
-    a link within ``ACTIVE`` px of the margin of an obstacle nearer it: from then on, until no
-    link is that near, the pose commanded the call before is polished onto the target for where
-    the base is now (``HOLD_OFF_ITERATIONS`` iterations at most), so the links near it come no
-    nearer as the base carries them by.
+    :attr:`clearance`'s skeleton is another one each call) nothing is planned, and the solver's
+    answers are handed on until they bring a link within ``ACTIVE`` px of the margin of an
+    obstacle nearer it: from then on, until no link is that near, the pose commanded the call
+    before is polished onto the target for where the base is now (``HOLD_OFF_ITERATIONS``
+    iterations at most), so the links near it come no nearer as the base carries them by.
 
     The search is spread over calls: each does at most ``budget`` units of its work
     (``ITERATION_UNITS`` per polish iteration, ``CHECK_UNITS`` per step of a path check and

@@ -376,15 +376,17 @@ class Skeleton:
         path = np.add.accumulate(angles) if self.is_chain else self._paths @ angles
         return path + self.base_angle
 
-    def clamp(self, angles: np.ndarray) -> np.ndarray:
-        """Angles clipped to the joint limits, radians.
+    def clamp(self, angles: np.ndarray | Sequence[float]) -> np.ndarray:
+        """Angles (an array or a list) clipped to the joint limits, radians.
 
         >>> Skeleton.chain([1], limits=[(-0.5, 0.5)]).clamp(np.array([2.0])).tolist()
         [0.5]
+        >>> Skeleton.chain([1, 1], limits=[(-0.5, 0.5)] * 2).clamp([-2.0, 0.25]).tolist()
+        [-0.5, 0.25]
         """
         # The array's own clip, the same as np.clip without its dispatch, which costs more than
         # the clip on a few links (solvers and the controller clamp every tick).
-        return angles.clip(self.lower, self.upper)
+        return np.asarray(angles, dtype=float).clip(self.lower, self.upper)
 
 
 def forward_kinematics(skeleton: Skeleton, angles: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
