@@ -337,6 +337,15 @@ class Clearance:
         self._a = caps[:, :2]
         self._b = caps[:, 2:4]
         self._r = caps[:, 4]
+        self._reach = radii[:, None] + self._r  # (n, k) the gap at which link and obstacle touch
+        self._ends = np.stack((self._a, self._b))[:, None, :]  # (2, 1, k, 2) obstacles' ends
+        # Gaps are measured apart for round obstacles (circles: both ends one point) and long
+        # ones (segments), which need their ends and crossings measured too.
+        round_ = np.all(self._a == self._b, axis=-1)
+        self._centers = self._a[round_]
+        self._round_reach = self._reach[:, round_]
+        self._long_ends = self._ends[:, :, ~round_]
+        self._long_reach = self._reach[:, ~round_]
         # How far a point of link i can be from joint j when j moves it (0 when it does not):
         # the step bound of path checks link by link; over every link, the longest way down
         # from joint j through its subtree.
@@ -357,11 +366,11 @@ class Clearance:
         if not sk.is_chain:
             return self._tree_points(poses)
         world = np.cumsum(poses, axis=-1) + sk.base_angle
-        steps = sk.lengths[:, None] * np.stack((np.cos(world), np.sin(world)), axis=-1)
-        joints = np.concatenate(
-            (np.broadcast_to(sk.base, (*poses.shape[:-1], 1, 2)), steps), axis=-2
-        )
-        return np.cumsum(joints, axis=-2)
+        joints = np.empty((*poses.shape[:-1], sk.count + 1, 2))
+        joints[..., 0, :] = sk.base
+        np.multiply(sk.lengths, np.cos(world), out=joints[..., 1:, 0])
+        np.multiply(sk.lengths, np.sin(world), out=joints[..., 1:, 1])
+        return np.cumsum(joints, axis=-2, out=joints)
 
     def _tree_points(self, poses: np.ndarray) -> np.ndarray:
         """(..., 2n, 2) link starts then link ends of a tree for (..., n) poses, px."""
@@ -392,60 +401,91 @@ class Clearance:
         p0 = starts[..., None, :]
         p1 = ends[..., None, :]
         q0, q1 = self._a, self._b
-        # Candidates: each link end against the obstacle, each obstacle end against the link.
-        c0 = _nearest_on(p0, q0, q1)
-        c1 = _nearest_on(p1, q0, q1)
-        c2 = _nearest_on(q0, p0, p1)
-        c3 = _nearest_on(q1, p0, p1)
-        on_link = np.stack(np.broadcast_arrays(p0, p1, c2, c3))
-        on_obstacle = np.stack(np.broadcast_arrays(c0, c1, q0 + 0 * p0, q1 + 0 * p0))
-        offset = on_link - on_obstacle
-        dist = np.hypot(offset[..., 0], offset[..., 1])
-        pick = np.argmin(dist, axis=0)
-        d = np.take_along_axis(dist, pick[None], axis=0)[0]
-        off = np.take_along_axis(offset, pick[None, ..., None], axis=0)[0]
-        point = np.take_along_axis(on_link, pick[None, ..., None], axis=0)[0]
+        # Candidates: each link end against the obstacle, each obstacle end against the link
+        # (both ends in one call: the calls, not the arithmetic, are the cost here); the
+        # nearest pair is the first of the least distance.
+        if self.skeleton.is_chain:
+            # A chain's links share their joints: each joint's nearest points once.
+            joints = _nearest_on(pts[..., :, None, :], q0, q1)  # (..., n + 1, k, 2)
+            from_start, from_end = joints[..., :-1, :, :], joints[..., 1:, :, :]
+        else:
+            from_start, from_end = _nearest_on(p0, q0, q1), _nearest_on(p1, q0, q1)
+        on_links = _nearest_on(
+            self._ends, starts[..., None, :, None, :], ends[..., None, :, None, :]
+        )  # (..., 2, n, k, 2)
+        point, off = p0, p0 - from_start
+        d = np.hypot(off[..., 0], off[..., 1])
+        for on_link, on_obstacle in (
+            (p1, from_end),
+            (on_links[..., 0, :, :, :], q0),
+            (on_links[..., 1, :, :, :], q1),
+        ):
+            offset = on_link - on_obstacle
+            dist = np.hypot(offset[..., 0], offset[..., 1])
+            nearer = dist < d
+            d = np.where(nearer, dist, d)
+            point = np.where(nearer[..., None], on_link, point)
+            off = np.where(nearer[..., None], offset, off)
         unit = off / np.maximum(d, 1e-9)[..., None]
-        crossing = _crossing(p0[..., 0, :], p1[..., 0, :], q0, q1)
+        crossing = _crossing(starts, ends, q0, q1)
         # A link through a thin obstacle: the way out is back the shortest way it came in.
         sign = np.where(crossing, -1.0, 1.0)
-        radii = self.radii[:, None] + self._r
-        return sign * d - radii, point, sign[..., None] * unit
+        return sign * d - self._reach, point, sign[..., None] * unit
 
     def _gaps(self, pts: np.ndarray, links: np.ndarray | None = None) -> np.ndarray:
-        """Signed gaps (..., n, k) between links and obstacles, without the directions; with
-        ``links`` (indices), those links' only (..., len(links), k), the same numbers."""
-        q0, q1 = self._a, self._b
+        """Each link's smallest signed gap (..., n) to any obstacle, px; with ``links``
+        (indices), those links' only (..., len(links)), the same numbers."""
         starts, ends = self._links(pts)
-        radii = self.radii
+        round_reach, long_reach = self._round_reach, self._long_reach
         if links is not None:
-            starts, ends, radii = starts[..., links, :], ends[..., links, :], radii[links]
-        if self.skeleton.is_chain and links is None:
-            # A chain's links share their joints: each joint's distance is computed once.
-            joints = _distance_to(pts[..., :, None, :], q0, q1)  # (..., n + 1, k)
-            near_start, near_end = joints[..., :-1, :], joints[..., 1:, :]
-        else:
-            near_start = _distance_to(starts[..., :, None, :], q0, q1)  # (..., n, k)
-            near_end = _distance_to(ends[..., :, None, :], q0, q1)
-        obstacle_ends = np.stack((q0, q1))[:, None, :]  # (2, 1, k, 2)
-        p0 = starts[..., None, :, None, :]
-        p1 = ends[..., None, :, None, :]
-        tips = _distance_to(obstacle_ends, p0, p1).min(axis=-3)  # (..., n, k)
-        d = np.minimum(np.minimum(near_start, near_end), tips)
-        crossing = _crossing(starts, ends, q0, q1)
-        return np.where(crossing, -d, d) - (radii[:, None] + self._r)
+            starts, ends = starts[..., links, :], ends[..., links, :]
+            round_reach, long_reach = round_reach[links], long_reach[links]
+        shared = self.skeleton.is_chain and links is None
+        least = []
+        if len(self._centers):
+            # A round obstacle is a point with a radius: no ends of its own to measure from,
+            # and no link crosses it.
+            centers = self._centers
+            if shared:
+                # A chain's links share their joints: each joint's distance is computed once.
+                off = pts[..., :, None, :] - centers
+                joints = np.hypot(off[..., 0], off[..., 1])  # (..., n + 1, k)
+                near_start, near_end = joints[..., :-1, :], joints[..., 1:, :]
+            else:
+                off = starts[..., :, None, :] - centers
+                near_start = np.hypot(off[..., 0], off[..., 1])  # (..., n, k)
+                off = ends[..., :, None, :] - centers
+                near_end = np.hypot(off[..., 0], off[..., 1])
+            along = _distance_to(centers, starts[..., :, None, :], ends[..., :, None, :])
+            d = np.minimum(np.minimum(near_start, near_end), along)
+            least.append((d - round_reach).min(axis=-1))
+        if self._long_reach.shape[-1]:
+            q0, q1 = self._long_ends[0, 0], self._long_ends[1, 0]
+            if shared:
+                joints = _distance_to(pts[..., :, None, :], q0, q1)  # (..., n + 1, k)
+                near_start, near_end = joints[..., :-1, :], joints[..., 1:, :]
+            else:
+                near_start = _distance_to(starts[..., :, None, :], q0, q1)  # (..., n, k)
+                near_end = _distance_to(ends[..., :, None, :], q0, q1)
+            p0 = starts[..., None, :, None, :]
+            p1 = ends[..., None, :, None, :]
+            tips = _distance_to(self._long_ends, p0, p1).min(axis=-3)  # (..., n, k)
+            d = np.minimum(np.minimum(near_start, near_end), tips)
+            crossing = _crossing(starts, ends, q0, q1)
+            least.append((np.where(crossing, -d, d) - long_reach).min(axis=-1))
+        return least[0] if len(least) == 1 else np.minimum(least[0], least[1])
 
     def gaps(self, angles: np.ndarray) -> np.ndarray:
         """(n,) each link's smallest gap to any obstacle, px (inf with none; < 0 overlapping)."""
         if not len(self.obstacles):
             return np.full(self.skeleton.count, math.inf)
-        return self._gaps(self.points(np.asarray(angles, dtype=float))).min(axis=-1)
+        return self._gaps(self.points(np.asarray(angles, dtype=float)))
 
     def smallest_gaps(self, poses: np.ndarray) -> np.ndarray:
         """(b,) the smallest gap of each of (b, n) poses over every link and obstacle, px."""
         if not len(self.obstacles):
             return np.full(len(poses), math.inf)
-        return self._gaps(self.points(poses)).min(axis=(-1, -2))
+        return self._gaps(self.points(poses)).min(axis=-1)
 
     def swept(self, a: np.ndarray, b: np.ndarray) -> float:
         """Farthest any point of the skeleton can move on the straight line from pose ``a`` to
@@ -1341,7 +1381,7 @@ class Clearance:
 
     def _link_gaps(self, poses: np.ndarray) -> np.ndarray:
         """(b, n) each link's smallest gap to any obstacle at each of (b, n) poses, px."""
-        return self._gaps(self.points(poses)).min(axis=-1)
+        return self._gaps(self.points(poses))
 
     def _stepping(
         self, here: np.ndarray, gaps: np.ndarray, to: np.ndarray
@@ -1367,8 +1407,10 @@ class Clearance:
         swept = float(sweeps[~open_].max())
         count = min(_MAX_SAMPLES, max(2, math.ceil(swept / PATH_STEP) + 1))
         poses = here + np.linspace(0.0, 1.0, count)[1:-1, None] * (to - here)
+        # The open links cannot come below the bar: only the others are measured.
+        links = None if not open_.any() else np.flatnonzero(~open_)
         for first in range(0, len(poses), PATH_CHUNK):
-            chunk = self.smallest_gaps(poses[first : first + PATH_CHUNK])
+            chunk = self._gaps(self.points(poses[first : first + PATH_CHUNK]), links).min(axis=-1)
             yield CHECK_UNITS + len(chunk) * self._pose_units
             if not np.all(chunk >= bar):
                 return None
@@ -1900,7 +1942,7 @@ class Avoider:
         least = float(kept[proven].min()) if proven.any() else math.inf
         if not proven.all():
             gaps = room._gaps(room.points(room._samples(measured, pose)), np.flatnonzero(~proven))
-            sampled = gaps.min(axis=(-1, -2))
+            sampled = gaps.min(axis=-1)
             if not np.all(sampled[1:] >= bar):
                 self._line = None
                 return False
@@ -2019,10 +2061,13 @@ def _distance_to(x: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 def _nearest_on(x: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """The point of each segment a-b nearest each x (broadcast), px."""
+    # Written out by coordinate: on arrays of a few dozen points numpy's per-call cost is the
+    # whole cost, and np.sum and np.clip cost several times a plain product or bound.
     ab = b - a
-    denom = np.maximum(np.sum(ab * ab, axis=-1), 1e-12)
-    u = np.clip(np.sum((x - a) * ab, axis=-1) / denom, 0.0, 1.0)
-    return a + u[..., None] * ab
+    ax = x - a
+    abx, aby = ab[..., 0], ab[..., 1]
+    u = (ax[..., 0] * abx + ax[..., 1] * aby) / np.maximum(abx * abx + aby * aby, 1e-12)
+    return a + np.minimum(np.maximum(u, 0.0), 1.0)[..., None] * ab
 
 
 def _crossing(p0: np.ndarray, p1: np.ndarray, q0: np.ndarray, q1: np.ndarray) -> np.ndarray:

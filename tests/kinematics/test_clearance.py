@@ -131,6 +131,27 @@ def test_batch_gaps_equal_the_single_pose_gaps():
     assert batch.tolist() == pytest.approx([room.gaps(p).min() for p in poses])
 
 
+@pytest.mark.parametrize("tree", [False, True])
+def test_gaps_among_discs_and_segments_are_the_least_of_each_alone(tree):
+    # Discs are measured apart from segments (no ends of their own, nothing crosses them).
+    segments = np.array([[-400.0, -20.0, 500.0, -20.0, 0.0], [130.0, 130.0, 420.0, 130.0, 6.0]])
+    discs = np.array([[60.0, 150.0, 25.0], [-120.0, 90.0, 40.0]])
+    if tree:
+        sk = Skeleton.tree([120.0, 90.0, 90.0], [-1, 0, 0], base_angle=UP)
+    else:
+        sk = Skeleton.chain([120.0, 120.0, 120.0], base_angle=UP)
+    radii = np.full(sk.count, 6.0)
+    room = Clearance(sk, radii, Obstacles.from_arrays(segments, discs))
+    alone = [Clearance(sk, radii, Obstacles.from_arrays(s[None], NO_CIRCLES)) for s in segments]
+    alone += [Clearance(sk, radii, Obstacles.from_arrays(NO_SEGMENTS, d[None])) for d in discs]
+    poses = np.random.default_rng(8).uniform(-2.5, 2.5, (30, sk.count))
+    least = np.min([other._link_gaps(poses) for other in alone], axis=0)
+    assert np.array_equal(room._link_gaps(poses), least)
+    assert np.array_equal([room.gaps(p) for p in poses], least)
+    some = np.array([0, 2])
+    assert np.array_equal(room._gaps(room.points(poses), some), least[:, some])
+
+
 def test_swept_bounds_how_far_any_point_moves():
     room = _shelf_room()
     rng = np.random.default_rng(7)
