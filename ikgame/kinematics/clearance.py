@@ -1550,6 +1550,8 @@ class Avoider:
         # calls it has stayed there (see _pinned).
         self._pin: np.ndarray | None = None
         self._pinned_calls = 0
+        # The last pose _pinned measured clear, and its links' gaps.
+        self._clear_at: tuple[np.ndarray, np.ndarray] | None = None
         self._line: tuple[np.ndarray, np.ndarray, float] | None = None
         self._checked: tuple[np.ndarray, np.ndarray] | None = None
         self._search: _Search | None = None
@@ -1906,10 +1908,23 @@ class Avoider:
         """Whether the chain has rested (within ``SETTLED`` on every joint) for ``PINNED_CALLS``
         calls with a link pressed into an obstacle: the motors carried it off the planned line
         into one, and it stays there. A link that brushes an obstacle on its way along the
-        line (a long chain low over the floor) moves on, and keeps its route."""
-        if self.clearance.gaps(measured).min() >= 0.0:
+        line (a long chain low over the floor) moves on, and keeps its route.
+
+        Asked on every tick a chain follows a route, so the gaps are measured only when the
+        last clear pose measured no longer proves them: a link's gap shrinks no faster than
+        its points move (:meth:`Clearance.swept_links`)."""
+        room = self.clearance
+        if self._clear_at is not None:
+            pose, gaps = self._clear_at
+            if float((gaps - room.swept_links(pose, measured)).min()) > 1e-6:
+                self._pin = None
+                return False
+        gaps = room.gaps(measured)
+        if gaps.min() >= 0.0:
+            self._clear_at = (measured.copy(), gaps)
             self._pin = None
             return False
+        self._clear_at = None
         if self._pin is None or np.abs(measured - self._pin).max() > SETTLED:
             self._pin, self._pinned_calls = measured.copy(), 0
         self._pinned_calls += 1

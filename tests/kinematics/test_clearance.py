@@ -981,6 +981,23 @@ def test_a_chain_brushing_an_obstacle_on_its_way_keeps_its_route():
     assert np.array_equal(guide._way[0], first)
 
 
+def test_a_chain_that_comes_to_rest_pressed_in_is_found_pinned():
+    room, guide, through, target = _shelf_route()
+    first = guide._way[0].copy()
+    # Moving in from clear poses (whose gaps prove the next few clear unmeasured) until the
+    # last link lies 1.6 px into the shelf, and resting there.
+    clear, pressed = np.array([0.3, -1.6, 0.0]), np.array([0.3, -1.85, 0.0])
+    assert room.gaps(clear).min() > 0.0 > room.gaps(pressed).min()
+    for s in np.linspace(0.0, 1.0, 11):
+        guide.steer(clear + s * (pressed - clear), through, target, 0.5)
+    assert np.array_equal(guide._way[0], first)
+    for _ in range(PINNED_CALLS):
+        guide.steer(pressed, through, target, 0.5)
+    while guide.planning:
+        guide.steer(pressed, through, target, 0.5)
+    assert not np.array_equal(guide._way[0], first)
+
+
 def _settle(guide: Avoider, measured: np.ndarray, answer: Solution, target: np.ndarray) -> list:
     """Every command while the avoider searches, the chain not moving, then the first after."""
     commands = [guide.steer(measured, answer, target, 0.5)]
