@@ -19,6 +19,7 @@ import argparse
 import math
 import time
 
+import _checkout  # noqa: F401  (first: this checkout's ikgame)
 import numpy as np
 
 from ikgame.kinematics import SOLVERS, RobustSolver, Skeleton, SolveStatus, forward_kinematics

@@ -35,6 +35,7 @@ import time
 from collections.abc import Callable
 from pathlib import Path
 
+import _checkout  # noqa: F401  (first: this checkout's ikgame)
 import numpy as np
 from chains import chain_level
 
