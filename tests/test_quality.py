@@ -2,6 +2,8 @@
 the weighted optimum a conflict is held to, and the table a set of runs makes."""
 
 import importlib
+import os
+import subprocess
 import sys
 from pathlib import Path
 
@@ -78,3 +80,22 @@ def test_the_footing_column_shows_only_with_a_creature_in_the_table():
     assert lines[3].endswith("| 2.50/1.00 x | FAIL x |")
     assert "every foot steps" in quality.legend([chain, walker])
     assert quality.summary([chain, walker]).startswith("runs passing: 1/2   checks passing: 14/15")
+
+
+def test_the_benchmarks_measure_the_checkout_they_live_in(tmp_path):
+    # Another ikgame first on the path (as an editable install of another worktree would be):
+    # a benchmark script run from this checkout still imports this checkout's.
+    other = tmp_path / "ikgame"
+    other.mkdir()
+    (other / "__init__.py").write_text("")
+    root = Path(__file__).resolve().parents[1]
+    probe = "import _checkout, ikgame; print(ikgame.__file__)"
+    done = subprocess.run(
+        [sys.executable, "-c", f"import sys; sys.path[0] = {str(root / 'benchmarks')!r}; {probe}"],
+        env={**os.environ, "PYTHONPATH": str(tmp_path)},
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        check=True,
+    )
+    assert Path(done.stdout.strip()) == root / "ikgame" / "__init__.py"
