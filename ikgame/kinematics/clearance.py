@@ -441,7 +441,7 @@ class Clearance:
             starts, ends = starts[..., links, :], ends[..., links, :]
             round_reach, long_reach = round_reach[links], long_reach[links]
         shared = self.skeleton.is_chain and links is None
-        least = []
+        least: list[np.ndarray] = []
         if len(self._centers):
             # A round obstacle is a point with a radius: no ends of its own to measure from,
             # and no link crosses it.
