@@ -386,9 +386,6 @@ class Servo:
         up, down, closing, carried, sides, weak_joints = [], [], [], [], [], []
         brake_share, stall_speed = BRAKE_SHARE, STALL_SPEED
         stall_time, stall_load, sqrt = STALL_TIME, STALL_LOAD, math.sqrt
-        # The sum of the closing speeds, and the time the first joint to stop needs to, at a
-        # constant deceleration, gathered on the way.
-        stop_in, closing_total = math.inf, 0.0
         for lim, low, e, v, i, h, top, pushing, before, was_carried, was_stalled in zip(
             limits,
             self._floors,
@@ -437,23 +434,17 @@ class Servo:
             # give way at it rather than set the chain's one factor (see give_way).
             weak_joints.append(is_stalled or overloaded)
             sides.append(side if is_stalled else 0.0)
-            size = 0.0 if is_stalled else (distance := abs(e))
+            size = 0.0 if is_stalled else abs(e)
             by_gain = gain * size
             speed = by_gain if by_gain < top else top
             by_brake = sqrt(2.0 * brake * size)
             speed = by_brake if by_brake < speed else speed
             c = speed if e > 0.0 else -speed if e < 0.0 else 0.0 * speed if e == 0.0 else e
             closing.append(c)
-            magnitude = abs(c)
-            closing_total += magnitude
-            if magnitude > 1e-9:
-                # (a stalled joint's closing speed is zero: its distance is not needed)
-                stop = 2.0 * distance / magnitude
-                stop_in = stop if stop < stop_in else stop_in
         self._carried, self._stalled, self._velocities = carried, sides, now
         if together:
             closing = _together(errors, closing)
-            stop_in, closing_total = _stopping(errors, closing)
+        stop_in, closing_total = _stopping(errors, closing)
         # The loads of braking and of spinning are evaluated only when a bound on them (see
         # _Quiet) leaves any joint short of room: otherwise their factor is 1, exactly.
         quiet, factor = self._quiet, 1.0
