@@ -443,6 +443,7 @@ class ScriptRunner:
         self._named = self.effectors != (CHAIN_EFFECTOR,)
         self._targets: dict[str, np.ndarray] = {}
         self._run = None
+        self._upcoming: dict[str, np.ndarray] | None = None
         self._begin(0, 0.0)
 
     @property
@@ -472,6 +473,19 @@ class ScriptRunner:
         """The point the only effector aims at now, px (None before any target is set, and in a
         script of several effectors: read :attr:`targets`)."""
         return None if self._default is None else self._targets.get(self._default)
+
+    @property
+    def upcoming(self) -> dict[str, np.ndarray] | None:
+        """Every effector's target once the next step begins, px, by name, when it is known
+        before then: the running step holds its targets still (a reach or a wait) and the next
+        is a reach step, with no set step between (one can change the solver or the gains);
+        else None. A controller plans the way there while the chain holds its target.
+
+        >>> runner = ScriptRunner([ReachStep(reach=(0, 10)), ReachStep(reach=(5, 5))])
+        >>> runner.upcoming["tip"].tolist()
+        [5.0, 5.0]
+        """
+        return self._upcoming
 
     def take_changes(self) -> list[SetChanges]:
         """The changes of the ``set`` steps that began since the last call, oldest first.
@@ -524,9 +538,17 @@ class ScriptRunner:
                 )
             )
             index += 1
+        self._upcoming = None
         if index >= len(self.steps):
             self._run = None
             return
         source, step = self.steps[index]
         self._run = _RUNS[type(step)](index, source, step, time, self._default, self._named)
         self._targets.update(self._run.targets(time))
+        if isinstance(self._run, _ReachRun | _WaitRun) and index + 1 < len(self.steps):
+            after = self.steps[index + 1][1]
+            if isinstance(after, ReachStep):
+                points = after.targets(self._default).items()
+                self._upcoming = self._targets | {
+                    name: np.array(point, dtype=float) for name, point in points
+                }

@@ -305,3 +305,44 @@ def test_a_script_of_several_effectors_needs_them_named():
         ScriptRunner([ReachStep(reach=(0.0, 1.0))], effectors=("a", "b"))
     with pytest.raises(ValueError, match='name it: effector = "name"'):
         ScriptRunner([_follow("line", from_=(0, 0), to=(1, 0), duration=1.0)], effectors=("a", "b"))
+
+
+def _upcoming_along(runner: ScriptRunner, seconds: float, dt: float = 0.01) -> list:
+    """:attr:`ScriptRunner.upcoming` at every tick (by name, as lists) of a play whose
+    effectors are always on their targets."""
+    seen, time = [], 0.0
+    while not runner.done and time < seconds:
+        upcoming = runner.upcoming
+        seen.append(None if upcoming is None else {n: p.tolist() for n, p in upcoming.items()})
+        time = round(time + dt, 9)
+        runner.observe(time, dt, runner.targets)
+    return seen
+
+
+def test_the_upcoming_targets_are_known_while_a_reach_or_a_wait_holds_its_own():
+    script = [
+        ReachStep(reach={"a": (1.0, 0.0)}, hold=0.0),
+        WaitStep(wait=0.05),
+        ReachStep(reach={"b": (2.0, 0.0)}, hold=0.0),
+        ReachStep(reach={"a": (3.0, 3.0)}, hold=0.0),
+        SetStep.model_validate({"set": {"gain": 3.0}}),
+        ReachStep(reach={"a": (4.0, 4.0)}, hold=0.0),
+        _follow("line", from_=(0, 5), to=(10, 5), duration=0.05, lead_in=0.0, effector="b"),
+        ReachStep(reach={"a": (5.0, 5.0)}, hold=0.0),
+    ]
+    runner = ScriptRunner(script, effectors=("a", "b"))
+    seen = _upcoming_along(runner, 2.0)
+    changes = [seen[0]] + [
+        now for before, now in zip(seen, seen[1:], strict=False) if now != before
+    ]
+    assert changes == [
+        # Reaching "a": the next step is a wait, no new target.
+        None,
+        # Waiting: the next reach aims "b" too, and "a" keeps its target.
+        {"a": [1.0, 0.0], "b": [2.0, 0.0]},
+        {"a": [3.0, 3.0], "b": [2.0, 0.0]},
+        # The reach after a set step (which can change the solver) is not known ahead, nor a
+        # path's moving targets, nor what follows them.
+        None,
+    ]
+    assert runner.done and runner.upcoming is None
