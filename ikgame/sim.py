@@ -194,6 +194,8 @@ class Simulation:
         self.record = record
         self.snapshots: list[Snapshot] = []
         self._overrides: dict[str, np.ndarray] = {}
+        # The script's upcoming targets last aimed at, and that aim (see _upcoming).
+        self._next: tuple[object, np.ndarray | TargetSet | None] = (None, None)
         self._max_ticks = round(level.level.duration * level.world.tick_rate)
         self._fps = level.world.fps
         self._tick_rate = level.world.tick_rate
@@ -347,6 +349,7 @@ class Simulation:
             gravity=self.world.gravity,
             dt=self.dt,
             base_motion=base_motion,
+            upcoming=None if self.controller.avoider is None else self._upcoming(),
         )
         drive = command.drive
         self.world.drive(drive.rates, drive.torques, drive.forces, drive.budgets)
@@ -404,9 +407,22 @@ class Simulation:
         )
 
     def _goal(self) -> np.ndarray | TargetSet | None:
-        """What the controller aims at this tick: the tip's point for a chain, else the set of
-        every targeted effector (in link order, with its weight)."""
-        targets = self.targets
+        """What the controller aims at this tick (see :meth:`_aim`)."""
+        return self._aim(self.targets)
+
+    def _upcoming(self) -> np.ndarray | TargetSet | None:
+        """What the controller will aim at once the script's next step begins, when the script
+        alone sets the targets and knows it now (see :attr:`ScriptRunner.upcoming`)."""
+        upcoming = self.script.upcoming
+        if upcoming is None or self.gait is not None or self._overrides:
+            return None
+        if self._next[0] is not upcoming:
+            self._next = (upcoming, self._aim(upcoming))
+        return self._next[1]
+
+    def _aim(self, targets: dict[str, np.ndarray]) -> np.ndarray | TargetSet | None:
+        """What the controller aims at for the effectors' ``targets``: the tip's point for a
+        chain, else the set of every targeted effector (in link order, with its weight)."""
         if not self.world.is_tree:
             # A chain aims its tip at a point. A tree aims a set of targets, even a single one
             # (its root may sit off the base, which the chain solvers refuse).

@@ -102,6 +102,40 @@ def test_the_chain_reaches_under_a_shelf_without_pressing_against_it(make_level)
     assert deepest > -1.0
 
 
+def test_the_way_to_the_next_scripted_target_is_planned_while_the_chain_holds_one(
+    make_level, monkeypatch
+):
+    level = make_level(
+        **_THREE_LINKS_IN_GRAVITY,
+        obstacles=[
+            {"kind": "segment", "a": [-400.0, -20.0], "b": [500.0, -20.0]},
+            {"kind": "segment", "a": [130.0, 130.0], "b": [420.0, 130.0], "radius": 6.0},
+        ],
+        script=[
+            {"reach": [60.0, 330.0], "hold": 0.5, "timeout": 4.0},
+            {"reach": [290.0, 45.0], "hold": 0.5, "timeout": 4.0},
+        ],
+    )
+
+    def second_reach() -> tuple[int, float]:
+        """Ticks the chain waited for its way after the second target came, and its time to
+        reach that target (s)."""
+        sim = Simulation(level, solver="dls", record=False)
+        waited = 0
+        while not sim.done:
+            sim.step()
+            waited += sim.script.step_index == 1 and sim.controller.avoider.planning
+        assert sim.result.status == "passed"
+        return waited, sim.result.steps[1].time_to_reach
+
+    ahead = second_reach()
+    monkeypatch.setattr(Simulation, "_upcoming", lambda sim: None)
+    searched = second_reach()
+    # Searched only once the target came, the way kept the chain waiting a dozen ticks.
+    assert searched[0] >= 10 and ahead[0] == 0
+    assert ahead[1] < searched[1]
+
+
 @pytest.mark.parametrize("solver", ["ccd"])
 def test_tick_rate_independence(solver):
     base = load_level(DEFAULT_LEVEL)

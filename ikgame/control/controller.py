@@ -139,6 +139,8 @@ class Controller:
         self._gravity: tuple[float, float] | None = None
         self.ik_rate = ik_rate
         self._fresh: _Fresh | None = None
+        # The pose the avoider plans the next target's way from, and the solver answering there.
+        self._ahead: tuple[np.ndarray, RobustSolver] | None = None
 
     @property
     def ik_rate(self) -> float | None:
@@ -342,6 +344,7 @@ class Controller:
         gravity: tuple[float, float] | np.ndarray = (0.0, 0.0),
         dt: float | None = None,
         base_motion: tuple[np.ndarray, float] | None = None,
+        upcoming: np.ndarray | TargetSet | None = None,
     ) -> Command:
         """Motor commands toward ``target`` from the ``measured`` local angles (radians).
 
@@ -350,7 +353,10 @@ class Controller:
         ``velocities`` (rad/s, child - parent), ``gravity`` (px/s^2) and the tick ``dt`` (s)
         are needed too, and while the base moves ``base_motion``: its velocity (px/s) and spin
         (rad/s). With no target the chain holds the last pose it was asked for (or its current
-        one).
+        one). ``upcoming`` is the target that will follow this one, if known (a level script's
+        next step): while the chain rests (every joint slower than :data:`SETTLING`), the
+        avoider plans the way there on ticks it has no search of its own (see
+        :meth:`~ikgame.kinematics.Avoider.foresee`).
         """
         servo = self.servo
         if servo is not None and (velocities is None or dt is None):
@@ -372,6 +378,16 @@ class Controller:
             if solution is None:
                 solution = self._solve(measured, target)
             self._held = solution.angles
+            if (
+                upcoming is not None
+                and self.avoider is not None
+                and base_motion is None
+                and velocities is not None
+                and _largest(velocities) <= SETTLING
+            ):
+                self.avoider.foresee(
+                    self._wrapped(measured), upcoming, self.arrival, self._solve_ahead
+                )
         if self._all_limited:
             error = solution.angles - measured  # joint_error with nothing to wrap
         else:
@@ -489,11 +505,7 @@ class Controller:
     def _solve(self, measured: np.ndarray, target: np.ndarray | TargetSet) -> Solution:
         """The solver's answer from the ``measured`` pose, steered clear of obstacles; an
         answer that arrives is kept to be driven toward until the next solve."""
-        if self._all_limited:
-            start = np.array(measured, dtype=float)  # nothing to wrap
-        else:
-            wrapped = [wrap_angle(a) for a in np.asarray(measured, dtype=float).tolist()]
-            start = np.where(self._limited, measured, wrapped)
+        start = self._wrapped(measured)
         solve = self.solver.solve_targets if isinstance(target, TargetSet) else self.solver.solve
         solution = solve(start, target, max_iterations=self.iterations, tolerance=self.arrival)
         avoider = self.avoider
@@ -509,6 +521,27 @@ class Controller:
         )
         self._fresh = _Fresh(solution, solution.angles) if settled else None
         return solution
+
+    def _wrapped(self, measured: np.ndarray) -> np.ndarray:
+        """The ``measured`` pose, its free joints wrapped to [-pi, pi]."""
+        if self._all_limited:
+            return np.array(measured, dtype=float)  # nothing to wrap
+        wrapped = [wrap_angle(a) for a in np.asarray(measured, dtype=float).tolist()]
+        return np.where(self._limited, measured, wrapped)
+
+    def _solve_ahead(self, start: np.ndarray, target: np.ndarray | TargetSet) -> Solution:
+        """The solver's answer for ``target`` from the pose ``start``, as a solver of the same
+        kind gives it on its first call for that target and, asked again from the same pose
+        (the same array), on its next ones. It is a solver of its own: the chain's keeps the
+        answer and the search for the target it is on."""
+        ahead = self._ahead
+        if ahead is None or ahead[0] is not start:
+            solver = RobustSolver(self._skeleton, self.solver.solver_name)
+            solver.strain = self.solver.strain
+            ahead = self._ahead = (start, solver)
+        solver = ahead[1]
+        solve = solver.solve_targets if isinstance(target, TargetSet) else solver.solve
+        return solve(start, target, max_iterations=self.iterations, tolerance=self.arrival)
 
     def _reuse(
         self,

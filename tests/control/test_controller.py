@@ -59,13 +59,8 @@ def test_unknown_solver_and_bad_gain_are_value_errors():
 def test_with_an_avoider_the_chain_goes_under_the_shelf_without_touching_it(solver):
     # Three 120 px links mounted straight up; a shelf 130 px up to the right and a floor. The
     # solvers alone press the arm through the shelf for targets under it.
-    skeleton = Skeleton.chain([120.0] * 3, base_angle=math.pi / 2, limits=[(-2.618, 2.618)] * 3)
-    shelf = Obstacles.from_arrays(
-        np.array([[-400.0, -20.0, 500.0, -20.0, 0.0], [130.0, 130.0, 420.0, 130.0, 6.0]]),
-        np.empty((0, 3)),
-    )
-    room = Clearance(skeleton, np.full(3, 6.0), shelf)
-    ctl = Controller(skeleton, solver, max_speed=np.full(3, 50.0), gain=10.0, avoider=Avoider(room))
+    ctl = _shelf_controller(solver)
+    room = ctl.avoider.clearance
     pose, dt = np.array([0.5, 0.3, 0.2]), 1.0 / 240.0
     for target in ([290.0, 45.0], [-150.0, 230.0]):
         # The search for the way round is spread over up to about 160 of these ticks, and the
@@ -74,6 +69,41 @@ def test_with_an_avoider_the_chain_goes_under_the_shelf_without_touching_it(solv
             pose = pose + ctl.command(pose, np.array(target)).rates * dt
             assert room.gaps(pose).min() > -0.5
         assert np.hypot(*(room.points(pose)[-1] - target)) <= 1.0
+
+
+def _shelf_controller(solver: str) -> Controller:
+    """Three 120 px links mounted straight up, with an avoider for a shelf 130 px up to the
+    right and a floor."""
+    skeleton = Skeleton.chain([120.0] * 3, base_angle=math.pi / 2, limits=[(-2.618, 2.618)] * 3)
+    shelf = Obstacles.from_arrays(
+        np.array([[-400.0, -20.0, 500.0, -20.0, 0.0], [130.0, 130.0, 420.0, 130.0, 6.0]]),
+        np.empty((0, 3)),
+    )
+    room = Clearance(skeleton, np.full(3, 6.0), shelf)
+    return Controller(
+        skeleton, solver, max_speed=np.full(3, 50.0), gain=10.0, avoider=Avoider(room)
+    )
+
+
+@pytest.mark.parametrize("solver", ["ccd", "fabrik"])
+def test_planning_ahead_leaves_the_commands_for_the_target_held_now_as_they_are(solver):
+    ahead, alone = _shelf_controller(solver), _shelf_controller(solver)
+    pose, dt = np.array([0.5, 0.3, 0.2]), 1.0 / 240.0
+    held, under = np.array([-150.0, 230.0]), np.array([290.0, 45.0])
+    rates = np.zeros(3)
+    for _ in range(300):
+        # Motors that turn at the rates they are told: the chain comes to rest on its goal.
+        command = ahead.command(pose, held, velocities=rates, upcoming=under)
+        assert np.array_equal(command.rates, alone.command(pose, held).rates)
+        rates = command.rates
+        pose = pose + rates * dt
+    # The way under the shelf is ready as the target comes: the chain sets off at once, on a
+    # clear way, where alone it waits for the search.
+    command = ahead.command(pose, under)
+    assert not ahead.avoider.planning and np.abs(command.rates).max() > 1.0
+    assert ahead.avoider.clearance.path_clear(pose, command.solution.angles)
+    alone.command(pose, under)
+    assert alone.avoider.planning
 
 
 def test_a_chain_its_base_carries_toward_its_target_is_held_off_the_floor():

@@ -1089,6 +1089,97 @@ def test_the_budget_is_a_positive_amount_of_work():
         Avoider(_shelf_room(), budget=0)
 
 
+def _holding_up(budget: float) -> tuple[Avoider, np.ndarray, Solution, np.ndarray]:
+    """An avoider of the shelf room with ``budget``, its chain resting on a clear answer for a
+    first target; the solver's answer for the next one, in under the shelf, and that target."""
+    guide = Avoider(_shelf_room(), budget=budget)
+    rest = np.array([0.5, 0.3, 0.2])
+    guide.steer(rest, Solution(rest, SolveStatus.SUCCESS, 0, 0.0), np.array([-50.0, 350.0]), 0.5)
+    through = Solution(np.array([-0.3, -1.2, -0.6]), SolveStatus.SUCCESS, 10, 0.0)
+    return guide, rest, through, np.array([290.0, 45.0])
+
+
+def _holding_on(guide: Avoider, rest: np.ndarray, calls: int, upcoming=None, answer=None) -> None:
+    """``calls`` calls of a chain resting on its first target (see :func:`_holding_up`), each
+    planning ahead for ``upcoming`` with the solver's ``answer``, if given."""
+    holding = Solution(rest, SolveStatus.SUCCESS, 0, 0.0)
+    for _ in range(calls):
+        guide.steer(rest, holding, np.array([-50.0, 350.0]), 0.5)
+        if upcoming is not None:
+            guide.foresee(rest, upcoming, 0.5, lambda pose, target: answer)
+
+
+def test_a_way_planned_ahead_is_taken_up_when_its_target_comes():
+    at_once, rest, through, target = _holding_up(math.inf)
+    searched = _settle(at_once, rest, through, target)
+    assert len(searched) == 1 and searched[0].status is SolveStatus.PROCESSING
+    spread = _holding_up(ITERATION_UNITS)[0]
+    assert len(_settle(spread, rest, through, target)) > 10
+    ahead = _holding_up(ITERATION_UNITS)[0]
+    _holding_on(ahead, rest, 1000, target, through)
+    # The search was done while the chain held its first target: none is left to wait for,
+    # and the chain follows the plan one search in one call finds.
+    assert len(_settle(ahead, rest, through, target)) == 1 and not ahead.planning
+    assert np.array_equal(
+        _move_as_told(ahead, rest, through, target, 300),
+        _move_as_told(at_once, rest, through, target, 300),
+    )
+
+
+def test_a_way_planned_ahead_is_searched_on_from_where_it_stopped():
+    guide, rest, through, target = _holding_up(ITERATION_UNITS)
+    _holding_on(guide, rest, 10, target, through)
+    fresh = _holding_up(ITERATION_UNITS)[0]
+    assert (
+        0
+        < len(_settle(guide, rest, through, target))
+        < len(_settle(fresh, rest, through, target)) - 9
+    )
+
+
+def test_a_way_planned_ahead_from_another_pose_is_not_taken_up():
+    guide, rest, through, target = _holding_up(math.inf)
+    _holding_on(guide, rest, 1, target, through)
+    elsewhere = rest + np.array([0.0, 0.0, 0.1])
+    moved = _holding_up(math.inf)[0]
+    # The chain never came to rest where the way planned ahead starts: it is searched afresh,
+    # from where it is, as it is without planning ahead.
+    assert np.array_equal(
+        _move_as_told(guide, elsewhere, through, target, 300),
+        _move_as_told(moved, elsewhere, through, target, 300),
+    )
+
+
+def test_a_way_planned_ahead_is_dropped_once_the_solvers_answer_needs_none():
+    guide, rest, through, target = _holding_up(ITERATION_UNITS)
+    on_its_way = Solution(through.angles, SolveStatus.PROCESSING, 10, 40.0)
+    beside = Solution(rest + 0.05, SolveStatus.SUCCESS, 10, 0.0)  # clear, and clear to turn to
+    answers = iter([on_its_way] * 3 + [beside] * 1000)
+    asked = []
+    for _ in range(500):
+        guide.steer(
+            rest, Solution(rest, SolveStatus.SUCCESS, 0, 0.0), np.array([-50.0, 350.0]), 0.5
+        )
+        guide.foresee(rest, target, 0.5, lambda pose, aim: asked.append(1) or next(answers))
+    # Asked again while its answer was on its way, then no more; and the search it would have
+    # dropped is not taken up: the target's own search begins as without planning ahead.
+    assert len(asked) == 4
+    alone = _holding_up(ITERATION_UNITS)[0]
+    waits = len(_settle(alone, rest, on_its_way, target))
+    assert waits > 10 and len(_settle(guide, rest, on_its_way, target)) == waits
+
+
+def test_planning_ahead_takes_only_calls_that_did_no_search_work():
+    guide, rest, through, target = _holding_up(ITERATION_UNITS)
+    searching = guide.steer(rest, through, target, 0.5)
+    assert guide.planning and searching.status is SolveStatus.PROCESSING
+    asked = []
+    guide.foresee(
+        rest, np.array([-200.0, 45.0]), 0.5, lambda pose, aim: asked.append(aim) or through
+    )
+    assert not asked
+
+
 def test_while_it_searches_the_chain_keeps_to_the_clear_pose_it_was_last_sent_to():
     room = _shelf_room()
     guide = Avoider(room, budget=ITERATION_UNITS)
