@@ -1646,19 +1646,11 @@ class Avoider:
                 return self._advance(search, measured, solution)
             self._forget()
         if search is None or not (search.reroute and search.key == key):
-            if self._far_enough(measured, solution.angles):
+            needed, goal = self._needs(measured, solution)
+            if not needed:
                 self._drop()
                 return solution
-            reaches = solution.status is not SolveStatus.PROCESSING
-            goal = None
-            if reaches and room.is_clear(solution.angles):
-                if self._clear_way(measured, solution.angles):
-                    self._drop()
-                    return solution
-                goal = solution.angles
             if search is None:
-                # An answer still on its way (PROCESSING) is no goal to route to: a clear one
-                # that arrives is searched for instead.
                 work = self._planning(measured, solution.angles, target, tolerance, goal)
                 search = self._begin(key, measured, work, reroute=False)
         return self._advance(search, measured, solution)
@@ -1852,10 +1844,10 @@ class Avoider:
         within ``SETTLED`` of that pose on every joint takes up that search as its own, done or
         part done (unless the answer its solver gives then needs none: see :meth:`steer`), so a
         level's next way is searched while its chain holds a target. (Planned from the pose the
-        chain is sent to instead, before it
-        rests there, the solver's answer from it can be another than from where the chain comes
-        to rest: a long chain sags under gravity, and FABRIK's thirty links of
-        ``48_chain30_gravity`` took 1.5 s instead of 0.6 to the goal it gave.)
+        chain is sent to instead, before it rests there, the solver's answer from it can be
+        another than from where the chain comes to rest: a long chain sags under gravity, and
+        FABRIK's thirty links of ``48_chain30_gravity`` took 1.5 s instead of 0.6 to the goal it
+        gave.)
 
         >>> arm = Skeleton.chain([100.0, 100.0], base_angle=math.pi / 2)
         >>> shelf = Obstacles.from_arrays(np.array([[-50.0, 150.0, 50.0, 150.0, 0.0]]), np.empty((0, 3)))
@@ -1877,44 +1869,32 @@ class Avoider:
         ahead = self._ahead
         if ahead is None or ahead.search.key != key or not _within(start, ahead.search.start):
             answer = solve(start, target)
-            work = self._foreseeing(start, answer, target, tolerance)
+            needed, goal = self._needs(start, answer)
+            work = self._planning(start, answer.angles, target, tolerance, goal)
             ahead = self._ahead = _Ahead(_Search(key, work, start, start, False), answer)
-            ahead.needless = self._needless(start, answer)
+            ahead.needless = not needed
         elif not ahead.needless and ahead.answer.status is SolveStatus.PROCESSING:
             # The chain waits while its search runs, and its solver answers from where it
             # waits, tick after tick, until the answer arrives (and may need no search).
             ahead.answer = solve(ahead.search.start, target)
-            ahead.needless = self._needless(ahead.search.start, ahead.answer)
+            ahead.needless = not self._needs(ahead.search.start, ahead.answer)[0]
         if not ahead.needless and ahead.answer.status is not SolveStatus.PROCESSING:
             self._run(ahead.search)
 
-    def _foreseeing(
-        self,
-        start: np.ndarray,
-        answer: Solution,
-        target: np.ndarray | TargetSet,
-        tolerance: float,
-    ) -> _Work[_Plan | None]:
-        """The search :meth:`_steer` begins from ``start`` for the solver's ``answer``."""
-        room = self.clearance
-        goal = None
-        if answer.status is not SolveStatus.PROCESSING and room.is_clear(answer.angles):
-            goal = answer.angles
-        return self._planning(start, answer.angles, target, tolerance, goal)
-
-    def _needless(self, measured: np.ndarray, solution: Solution) -> bool:
-        """Whether :meth:`_steer` drops a search (or begins none) for the solver's ``solution``
-        from ``measured``: far enough from every obstacle, or an answer that arrived clear and
-        clear to turn to."""
+    def _needs(self, measured: np.ndarray, solution: Solution) -> tuple[bool, np.ndarray | None]:
+        """Whether the solver's ``solution`` from ``measured`` needs a search, and the goal to
+        route to: none when every link is far enough from every obstacle, or the answer arrived
+        clear and clear to turn to; an answer that arrived clear is the goal, and one still on
+        its way (PROCESSING) is no goal (a clear one that arrives is searched for instead)."""
         if self._far_enough(measured, solution.angles):
-            return True
-        arrived = solution.status is not SolveStatus.PROCESSING
-        room = self.clearance
-        return (
-            arrived
-            and room.is_clear(solution.angles)
-            and self._clear_way(measured, solution.angles)
-        )
+            return False, None
+        if solution.status is SolveStatus.PROCESSING or not self.clearance.is_clear(
+            solution.angles
+        ):
+            return True, None
+        if self._clear_way(measured, solution.angles):
+            return False, None
+        return True, solution.angles
 
     def _take_ahead(self, key: tuple[float, ...], measured: np.ndarray) -> None:
         """Take up the search :meth:`foresee` planned for the target of ``key``, if the chain
