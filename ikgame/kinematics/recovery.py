@@ -19,6 +19,10 @@ once per tick:
    more than ``JUMPED`` times as far from the chain, or a plain solve stuck short of the target,
    gives way to the last answer: a solver whose answer is not continuous in its start (FABRIK
    against tight limits) would otherwise hand the chain a goal of another shape every tick.
+   A target that moves on every call (one the chain follows) gets the plain answer that
+   arrives slid off the joints' stops along the poses that keep the end where it is, while a
+   limited joint is within ``OFF_STOPS`` of one: a follower pressed against its stops has no
+   room left to follow with, and one coiled into them is trapped.
 3. **Recovery**, only when the plain solve stalled short of a target within reach: ``FAILURE``;
    ``PROCESSING`` having gained less than ``STALL_PROGRESS`` of its start error; or
    ``STALL_CALLS`` calls on one target without arriving. It restarts from other seeds, the
@@ -106,6 +110,9 @@ __all__ = [
     "WAY_STEPS",
     "RELIEF_STEPS",
     "RELIEF_TURN",
+    "OFF_STOPS",
+    "OFF_STOPS_STEPS",
+    "OFF_STOPS_TURN",
     "holds_along",
     "held_nearest",
     "HELD_STEPS",
@@ -158,6 +165,16 @@ RELIEF_STEPS: Final = 40
 kept on the target (see ``_relieved``)."""
 
 RELIEF_TURN: Final = 0.05
+"""Radians: the most one joint turns in one step of that slide."""
+
+OFF_STOPS: Final = 0.15
+"""Radians: an answer for a moving target with a limited joint this near one of its stops is
+slid off them (see ``_off_stops``)."""
+
+OFF_STOPS_STEPS: Final = 4
+"""Most steps of that slide in one call."""
+
+OFF_STOPS_TURN: Final = 0.03
 """Radians: the most one joint turns in one step of that slide."""
 
 HELD_STEPS: Final = 100
@@ -340,6 +357,7 @@ class RobustSolver:
         self._quiet = 0
         self._pending: _Goal | None = None
         self._waiting = 0
+        self._moves = 0  # calls in a row with a goal other than the call before's
         self._unheld: _Goal | None = None
         # The target whose search for an answer with a way the motors hold found none.
         self._way_searched: _Goal | None = None
@@ -380,6 +398,8 @@ class RobustSolver:
             self._skeleton, start, goal, max_iterations=max_iterations, tolerance=tol
         )
         skeleton = self._skeleton
+        if self._moves > 1 and plain.status is SolveStatus.SUCCESS:
+            plain = _off_stops(skeleton, plain, np.array(goal), tol)
         before = (
             0.0
             if plain.status is SolveStatus.SUCCESS
@@ -504,11 +524,14 @@ class RobustSolver:
         )
 
     def _count_calls(self, goal: _Goal) -> None:
-        """Count the calls in a row with one and the same goal."""
+        """Count the calls in a row with one and the same goal, and those in a row with a
+        new one each."""
         if goal == self._pending:
             self._waiting += 1
+            self._moves = 0
         else:
             self._pending, self._waiting = goal, 0
+            self._moves += 1
 
     def _cached(
         self,
@@ -1088,6 +1111,55 @@ def _relieved(
     return pose
 
 
+def _keeping_end(skeleton: Skeleton, pose: np.ndarray, turns: np.ndarray) -> np.ndarray:
+    """``turns`` (radians, per joint) less their part that moves the end: their projection on
+    the poses that keep the end where it is at ``pose`` (the null space of its Jacobian)."""
+    jac = jacobian(skeleton, pose)
+    return turns - np.linalg.pinv(jac) @ (jac @ turns)
+
+
+def _off_stops(skeleton: Skeleton, plain: Solution, target: np.ndarray, tol: float) -> Solution:
+    """The arrived ``plain`` answer for a moving ``target`` (px), slid off the joints' stops
+    along the poses that keep the end where it is, when a limited joint is within
+    ``OFF_STOPS`` of one: down the sum of each limited joint's squared offset from the middle of
+    its range (as a share of half the range), ``OFF_STOPS_TURN`` at most per joint and step, for
+    ``OFF_STOPS_STEPS`` steps. The slid pose is the answer if its end is still within ``tol``
+    (px) of the target; otherwise ``plain`` stands.
+
+    A solver follows a moving target from where the chain is, and nothing in its step keeps the
+    joints off their stops: CCD turns each joint as far as the end asks, and curls a chain into
+    them. On `58_moving_base_line`, the base sliding under a target that came near it, CCD
+    curled the last two of five joints onto their -150 deg stops; the end followed, until the
+    line led where no pose near that coil reaches, and from the coil no restart got out (CCD,
+    and damped least squares from the coil and from it backed off the stops, each ended 27 px
+    short). Slid off the stops as it follows, the chain keeps the room to follow with.
+
+    >>> arm = Skeleton.chain([100.0, 100.0, 100.0], limits=[(-2.5, 2.5)] * 3)
+    >>> coiled = np.array([0.3, 2.45, -1.0])  # the elbow 0.05 rad from its stop
+    >>> end = _chain_points(arm, coiled)[-1]
+    >>> slid = _off_stops(arm, Solution(coiled, SolveStatus.SUCCESS, 3, 0.0), end, 0.5)
+    >>> slid.angles.round(3).tolist(), bool(slid.error <= 0.5)  # the elbow turns back a little
+    ([0.24, 2.437, -0.88], True)
+    """
+    limited = skeleton.limited
+    lower, upper = skeleton.lower, skeleton.upper
+    pose = plain.angles
+    if not np.any(limited & ((pose - lower < OFF_STOPS) | (upper - pose < OFF_STOPS))):
+        return plain
+    middle = np.where(limited, (lower + upper) / 2.0, 0.0)
+    spread = np.where(limited, ((upper - lower) / 2.0) ** 2, 1.0)
+    for _ in range(OFF_STOPS_STEPS):
+        away = _keeping_end(skeleton, pose, np.where(limited, (middle - pose) / spread, 0.0))
+        largest = float(np.abs(away).max())
+        if largest < 1e-12:
+            break
+        pose = skeleton.clamp(pose + away * min(1.0, OFF_STOPS_TURN / largest))
+    error = _error(skeleton, pose, target)
+    if error > tol:
+        return plain
+    return Solution(pose, plain.status, plain.iterations, error)
+
+
 def _run_out(steps: Generator[object, None, _Out]) -> _Out:
     """The return value of a generator of steps (see :func:`_held_nearest_steps`), run out."""
     while True:
@@ -1110,8 +1182,7 @@ def _slid_down(
             break
         down = -_strain_slope(pose, strain, now)
         if keep_end:
-            jac = jacobian(skeleton, pose)
-            down = down - np.linalg.pinv(jac) @ (jac @ down)
+            down = _keeping_end(skeleton, pose, down)
         largest = float(np.abs(down).max())
         if largest < 1e-12:
             break

@@ -25,6 +25,7 @@ from ikgame.kinematics import (
 from ikgame.kinematics.recovery import (
     HOLDS,
     JUMPED,
+    OFF_STOPS,
     RESTART_BUDGET,
     SETTLED,
     STILL_CALLS,
@@ -651,6 +652,44 @@ def test_when_no_pose_can_be_held_the_plain_answer_serves_without_searching_agai
     plain = RobustSolver(arm, "dls").solve(pose, target, max_iterations=10, tolerance=TOLERANCE)
     assert max(iterations[:5]) > plain.iterations  # it searched
     assert iterations[-5:] == [plain.iterations] * 5  # and then gave up searching
+
+
+ELBOW_ARM = Skeleton.chain([100.0, 100.0, 100.0], limits=[(-2.6, 2.6)] * 3)
+
+
+def _follow_up(robust: RobustSolver | None, moving: bool) -> list:
+    """Eight answers for a target that starts at the end of ``ELBOW_ARM`` with its elbow 0.05
+    rad from its stop and moves 1 px up a call (or holds still), each call from the last
+    answer, by ``robust`` or (None) by the plain CCD solve; tolerance 2 px."""
+    pose = np.array([0.2, 2.55, 1.0])
+    start = _end(ELBOW_ARM, pose)
+    answers = []
+    for k in range(8):
+        target = start + np.array([0.0, float(k) if moving else 0.0])
+        if robust is None:
+            sol = SOLVERS["ccd"](ELBOW_ARM, pose, target, max_iterations=10, tolerance=2.0)
+        else:
+            sol = robust.solve(pose, target, max_iterations=10, tolerance=2.0)
+        assert sol.status is SolveStatus.SUCCESS
+        assert np.linalg.norm(_end(ELBOW_ARM, sol.angles) - target) <= 2.0
+        answers.append(sol.angles)
+        pose = sol.angles
+    return answers
+
+
+def test_a_followed_target_gets_answers_slid_off_the_stops():
+    followed = _follow_up(RobustSolver(ELBOW_ARM, "ccd"), moving=True)
+    plain = _follow_up(None, moving=True)
+    # CCD alone keeps the elbow against its stop; slid along the poses that keep the end on
+    # the target, the answers take it out past OFF_STOPS, the end still within tolerance.
+    assert 2.6 - plain[-1][1] < 0.1
+    assert 2.6 - followed[-1][1] > OFF_STOPS
+
+
+def test_a_target_that_holds_still_gets_the_solvers_own_answer_on_its_stops():
+    held = _follow_up(RobustSolver(ELBOW_ARM, "ccd"), moving=False)
+    plain = _follow_up(None, moving=False)
+    assert all(np.array_equal(a, b) for a, b in zip(held, plain, strict=True))
 
 
 def test_a_moving_target_starts_no_search_for_a_pose_the_motors_can_hold():
