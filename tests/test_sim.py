@@ -131,8 +131,8 @@ def test_the_way_to_the_next_scripted_target_is_planned_while_the_chain_holds_on
     ahead = second_reach()
     monkeypatch.setattr(Simulation, "_upcoming", lambda sim: None)
     searched = second_reach()
-    # Searched only once the target came, the way kept the chain waiting a dozen ticks.
-    assert searched[0] >= 10 and ahead[0] == 0
+    # Searched only once the target came, the way kept the chain waiting half a dozen ticks.
+    assert searched[0] >= 5 and ahead[0] == 0
     assert ahead[1] < searched[1]
 
 

@@ -200,9 +200,10 @@ routes to such poses on ``34_chain40_pressed_to_floor`` took 4,000 to 71,000 uni
 were found, and from CCD's chain resting at the first target's, none to the second's in the
 500,000 of a whole step."""
 
-SEARCH_BUDGET: Final = 300
+SEARCH_BUDGET: Final = 600
 """Units of work an :class:`Avoider`'s search does in one call at most, before its last step (a
-unit is about 10 us of this machine's time: about 3 ms a call)."""
+unit is about 5 us of CPU time on the 2-core development machine: about 3 ms a call, so that
+the four ticks of a 60 fps frame leave room for the rest)."""
 
 ITERATION_UNITS: Final = 40
 """Units of search work one polish iteration counts for."""
