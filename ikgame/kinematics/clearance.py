@@ -177,8 +177,11 @@ STALE_ITERATIONS: Final = 12
 ROUTE_STEP: Final = 0.3
 """Largest joint change of one edge of a route tree, radians."""
 
-AHEAD: Final = 40.0
-"""A chain whose sweep to its via pose is at most this (px) may head for the next one."""
+AHEAD: Final = 100.0
+"""A chain whose sweep to its via pose is at most this (px) may head for the next one. About
+what ``LEAD`` turns an arm of a few hundred px through on its base joint: where the servo, held
+that close to the pose it is sent to, begins to brake. At 40 px a chain following a way of
+eight via poses had slowed to about 1 rad/s at each before it turned on."""
 
 LEAD: Final = 0.3
 """Most a pose commanded on a route's piece leads the joint that has come least far along it,

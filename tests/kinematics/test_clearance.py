@@ -641,6 +641,29 @@ def test_a_straight_way_to_a_far_goal_is_led_along_its_line_too():
     assert np.allclose(arrived, goal) and room.misses(arrived, target)[0] <= 0.5
 
 
+def test_a_chain_turns_on_at_a_via_pose_without_braking_to_rest_where_the_line_on_is_clear():
+    # A servo that closes its error at 12/s, as the default gain does, brakes within LEAD of
+    # the pose it is sent to. Turning on only once nearly there, the chain slowed at every via
+    # pose of a long way to a third of its speed.
+    room = _shelf_room()
+    guide = Avoider(room)
+    through = Solution(np.array([-0.3, -1.2, -0.6]), SolveStatus.SUCCESS, 10, 0.0)
+    target = np.array([290.0, 45.0])  # under the shelf
+    pose, rates, dt, gain = np.array([0.5, 0.3, 0.2]), np.zeros(3), 1.0 / 240.0, 12.0
+    pieces, turning_speeds = None, []
+    for _ in range(1000):
+        command = guide.steer(pose, through, target, 0.5)
+        if not guide.planning:
+            if pieces is not None and len(guide._way) < pieces:
+                turning_speeds.append(float(np.abs(rates).max()))
+            pieces = len(guide._way)
+        rates = np.clip(gain * (command.angles - pose), -4.2, 4.2)
+        pose = pose + rates * dt
+        assert room.is_clear(pose)
+    assert room.misses(pose, target)[0] <= 0.5
+    assert len(turning_speeds) >= 2 and max(turning_speeds) > 0.5 * gain * LEAD
+
+
 def test_a_line_past_a_half_turn_of_a_free_joint_is_followed_to_its_end():
     # The way round the post is the long way, past -pi on the free base joint, which the
     # controller measures within [-pi, pi].
