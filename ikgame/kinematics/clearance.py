@@ -205,7 +205,7 @@ were found, and from CCD's chain resting at the first target's, none to the seco
 
 SEARCH_BUDGET: Final = 600
 """Units of work an :class:`Avoider`'s search does in one call at most, before its last step (a
-unit is about 5 us of CPU time on the 2-core development machine: about 3 ms a call, so that
+unit is about 4.5 us of CPU time on the 2-core development machine: about 3 ms a call, so that
 the four ticks of a 60 fps frame leave room for the rest)."""
 
 ITERATION_UNITS: Final = 40

@@ -644,7 +644,7 @@ def test_a_straight_way_to_a_far_goal_is_led_along_its_line_too():
 def test_a_chain_turns_on_at_a_via_pose_without_braking_to_rest_where_the_line_on_is_clear():
     # A servo that closes its error at 12/s, as the default gain does, brakes within LEAD of
     # the pose it is sent to. Turning on only once nearly there, the chain slowed at every via
-    # pose of a long way to a third of its speed.
+    # pose of a long way to under a third of its speed.
     room = _shelf_room()
     guide = Avoider(room)
     through = Solution(np.array([-0.3, -1.2, -0.6]), SolveStatus.SUCCESS, 10, 0.0)
