@@ -308,10 +308,14 @@ class Controller:
             # What the kept answer asks of the motors was asked under the gravity before.
             self._fresh.strain = None
         servo = self.servo
+        solver = self.solver
         if servo is None or not self.skeleton.is_chain or not any(pull):
-            self.solver.strain = None
+            solver.strain = solver.strain_slope = None
             return
-        self.solver.strain = lambda angles: servo.strain(self._skeleton.world_angles(angles), pull)
+        world = self._skeleton.world_angles
+        solver.strain = lambda angles: servo.strain(world(angles), pull)
+        # The servo's slope is per joint turning everything beyond it: a chain's local angles.
+        solver.strain_slope = lambda angles: servo.strain_slope(world(angles), pull)
 
     def hold(self, measured: np.ndarray) -> None:
         """Stop pushing: hold the ``measured`` pose (radians) instead of solving, until
@@ -538,6 +542,7 @@ class Controller:
         if ahead is None or ahead[0] is not start:
             solver = RobustSolver(self._skeleton, self.solver.solver_name)
             solver.strain = self.solver.strain
+            solver.strain_slope = self.solver.strain_slope
             ahead = self._ahead = (start, solver)
         solver = ahead[1]
         solve = solver.solve_targets if isinstance(target, TargetSet) else solver.solve

@@ -256,6 +256,33 @@ class Pose:
             spin += chain.moments * alpha
         return JointLoads(tree.beyond(spin), forces)
 
+    def held_slope(self, joint: int, gravity: tuple[float, float] | np.ndarray) -> np.ndarray:
+        """(n,) how the torque that holding this pose still under ``gravity`` (px/s^2) takes
+        of ``joint`` changes as each joint turns, everything beyond it turning with it: mass
+        px^2/s^2 per radian. Closed form, in one pass over the links.
+
+        >>> upright = Pose(ChainInertia(np.full(2, 10.0), np.ones(2), np.ones(2)), np.full(2, np.pi / 2))
+        >>> upright.held_slope(0, (0.0, -10.0)).tolist()
+        [-200.0, -50.0]
+
+        The held torque of a joint is ``S x (-g)``, where ``S`` sums each link beyond it by its
+        mass times its centre's offset from the joint. Turning a joint at or before it turns
+        that whole sum; turning one beyond it turns only that joint's own sum. A quarter turn
+        of ``S`` crossed with ``-g`` is ``S . g``: so a joint's slope is ``S . g`` of whichever
+        of the two joints is the further out.
+        """
+        chain = self.chain
+        tree = chain._tree
+        joints = tree.along(self.links) - self.links
+        sums = tree.beyond(chain.masses[:, None] * (joints + self.halves))
+        sums -= chain.mass_beyond[:, None] * joints
+        turned = sums @ np.asarray(gravity, dtype=float)
+        alone = np.zeros(chain.count)
+        alone[joint] = 1.0
+        # Joints on the way from the base to ``joint`` (beyond() of its indicator), and those
+        # hanging from it (along() of it) less ``joint`` itself.
+        return tree.beyond(alone) * turned[joint] + (tree.along(alone) - alone) * turned
+
     def inertia(self) -> np.ndarray:
         """(n,) moment of inertia about each joint of everything beyond it, held rigid,
         mass px^2: what the joint's motor turns when it moves alone."""

@@ -167,6 +167,22 @@ class Servo:
         held = Pose(self.inertia, world_angles).loads(gravity=gravity).torques
         return float(np.max(np.abs(held) / self.max_torque))
 
+    def strain_slope(self, world_angles: np.ndarray, gravity: tuple[float, float]) -> np.ndarray:
+        """(n,) how :meth:`strain` at ``world_angles`` changes as each joint turns, everything
+        beyond it turning with it, per radian: the slope of the joint that strains most. One
+        pass over the links, where differences would ask the strain once per joint.
+
+        >>> one = ChainInertia(np.array([10.0]), np.array([2.0]), np.array([50.0 / 3.0]))
+        >>> servo = Servo(one, max_torque=np.array([1.8e4]), max_speed=np.ones(1), gain=12.0)
+        >>> servo.strain_slope(np.full(1, np.pi / 4), (0.0, -900.0)).round(4).tolist()
+        [-0.3536]
+        """
+        pose = Pose(self.inertia, world_angles)
+        held = pose.loads(gravity=gravity).torques
+        worst = int(np.argmax(np.abs(held) / self.max_torque))
+        side = math.copysign(1.0, held[worst]) / self.max_torque[worst]
+        return side * pose.held_slope(worst, gravity)
+
     def _room(self, torques: np.ndarray, hold: np.ndarray, share: float) -> np.ndarray:
         """The ``share`` of each joint's torque left, beyond its ``hold`` load, on the side of
         ``torques``; at least the floor, as for braking."""

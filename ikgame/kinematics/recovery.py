@@ -187,10 +187,17 @@ solve looks for an answer whose way the motors hold (see :meth:`RobustSolver.sol
 
 NEAREST_STRAINS: Final = 100
 """How many times one call of :meth:`RobustSolver.solve` asks the strain of poses on the way
-to :func:`held_nearest`'s at most, but for the step that passes it (a step asks it once per
-joint, for its slope, and up to a dozen times more), the plain answer serving meanwhile: the
-costliest such call took 7 ms on ten links and 11 ms on thirty. Taken at once, the steps
-toward a torque-bound target cost 140 ms for ten links and 360 ms for thirty."""
+to :func:`held_nearest`'s at most, but for the step that passes it (a step asks it for its
+slope and up to a dozen times more), the plain answer serving meanwhile. On a chain whose
+base cannot hold it reaching out, the costliest such call took 3.8 ms on ten links and 8.6 ms
+on thirty with the servo's slope (14 and 12 ms with the slope by differences). Taken at once,
+the steps toward a torque-bound target cost 140 ms for ten links and 360 ms for thirty (by
+differences)."""
+
+SLOPE_STRAINS: Final = 4
+"""How many strains asked a slope in closed form (:attr:`RobustSolver.strain_slope`) counts
+as: about what it costs. A servo's slope took 28-31 us on 3 to 30 links, where its strain took
+5.5-10 us, and 50-135 us on 200 to 1000 links, where the strain took 31-80 us."""
 
 JUMPED: Final = 2.0
 """A fresh answer more than this many times as far from the chain (its largest joint turn) as
@@ -297,6 +304,10 @@ class RobustSolver:
         """The largest share of a motor's torque limit that holding a chain's pose (local
         angles, radians) still takes, if known: an answer past ``STRAINED`` sends
         :meth:`solve` looking for one within ``HOLDS``."""
+        self.strain_slope: Callable[[np.ndarray], np.ndarray] | None = None
+        """The gradient of :attr:`strain` at a pose (per joint, per radian), if known in closed
+        form: without it, the slides down the strain take it by differences, which ask the
+        strain once per joint (on a thousand links, 88 ms a step)."""
         self.solver_name = solver_name
 
     @property
@@ -415,7 +426,9 @@ class RobustSolver:
             and strain is not None
             and self._waiting >= STILL_CALLS
         ):
-            held = self._held_answer(plain, goal, target, tol, start, strain)
+            held = self._held_answer(
+                plain, goal, target, tol, start, strain, _sloped(strain, self.strain_slope)
+            )
             if held is not None:
                 return held
         if plain.status is SolveStatus.SUCCESS:
@@ -696,6 +709,7 @@ class RobustSolver:
         tol: float,
         start: np.ndarray,
         strain: Callable[[np.ndarray], float],
+        slope: _Slope,
     ) -> Solution | None:
         """The answer instead of ``plain`` (arrived, or on its way) for a target that holds
         still, where the motors cannot hold it or the way to it from a spent rest (see
@@ -707,7 +721,7 @@ class RobustSolver:
             return (
                 _near_seeds(skeleton, self._solve, skeleton.clamp(start), plain.angles),
                 _far_held_seeds(
-                    skeleton, self._solve, self._fallback, plain.angles, target, strain
+                    skeleton, self._solve, self._fallback, plain.angles, target, strain, slope
                 ),
             )
 
@@ -733,7 +747,7 @@ class RobustSolver:
                 search,
                 iterations,
                 lambda: _held_nearest_steps(
-                    skeleton, (skeleton.clamp(start), plain.angles), target, strain
+                    skeleton, (skeleton.clamp(start), plain.angles), target, strain, slope
                 ),
             )
         if goal != self._way_searched and strain(start) > SPENT and not way(HOLDS)(plain.angles):
@@ -1083,17 +1097,18 @@ def _far_held_seeds(
     strained: np.ndarray,
     target: np.ndarray,
     strain: Callable[[np.ndarray], float],
+    slope: _Slope,
 ) -> _Seeds:
     """The far restarts of a search for a pose the motors can hold (``HOLD_SEEDS`` random),
     then the ``strained`` answer slid toward one they can hold (``_relieved``). The slide comes
     last: it finds a pose near the answer, but the way there may pass poses the motors cannot
     hold (a weak base lifting the stretched arm), where a far pose, folded, can be reached."""
     yield from _far_seeds(skeleton, solve, fallback, strained, target, HOLD_SEEDS)
-    yield _relieved(skeleton, strained, strain), (solve_dls,)
+    yield _relieved(skeleton, strained, strain, slope), (solve_dls,)
 
 
 def _relieved(
-    skeleton: Skeleton, angles: np.ndarray, strain: Callable[[np.ndarray], float]
+    skeleton: Skeleton, angles: np.ndarray, strain: Callable[[np.ndarray], float], slope: _Slope
 ) -> Generator[int, None, np.ndarray]:
     """``angles`` slid along the poses that keep the end where it is (the null space of the
     end's Jacobian) down the ``strain`` of holding them, until it is within ``HOLDS`` or stops
@@ -1105,9 +1120,9 @@ def _relieved(
     weak ones near the vertical); the slide goes there from the answer at hand. A step at a
     time, each yielding how many times it asked the ``strain``: on thirty links the whole
     slide took 20 ms, more than a frame, in the one call of the search that came to it."""
-    counted, asked = _counting(strain)
+    counted, counted_slope, asked = _counting(strain, slope)
     start = skeleton.clamp(np.array(angles, dtype=float))
-    pose, _ = yield from _asking(_slid_down(skeleton, start, counted, True), asked)
+    pose, _ = yield from _asking(_slid_down(skeleton, start, counted, counted_slope, True), asked)
     return pose
 
 
@@ -1170,7 +1185,11 @@ def _run_out(steps: Generator[object, None, _Out]) -> _Out:
 
 
 def _slid_down(
-    skeleton: Skeleton, pose: np.ndarray, strain: Callable[[np.ndarray], float], keep_end: bool
+    skeleton: Skeleton,
+    pose: np.ndarray,
+    strain: Callable[[np.ndarray], float],
+    slope: _Slope,
+    keep_end: bool,
 ) -> Generator[None, None, tuple[np.ndarray, float]]:
     """``pose`` (radians, within the limits) slid down the ``strain`` of holding it, its
     steepest way (along the poses that keep the end where it is, the null space of the end's
@@ -1180,7 +1199,7 @@ def _slid_down(
     for _ in range(RELIEF_STEPS):
         if now <= HOLDS:
             break
-        down = -_strain_slope(pose, strain, now)
+        down = -slope(pose, now)
         if keep_end:
             down = _keeping_end(skeleton, pose, down)
         largest = float(np.abs(down).max())
@@ -1205,11 +1224,13 @@ def held_nearest(
     starts: tuple[np.ndarray, ...],
     target: np.ndarray,
     strain: Callable[[np.ndarray], float],
+    slope: Callable[[np.ndarray], np.ndarray] | None = None,
 ) -> np.ndarray | None:
     """The pose nearest ``target`` (px) that the motors hold (``strain`` within ``HOLDS``), as
     far as steps from each of ``starts`` (radians) find it: the answer for a target the motors
     cannot hold the end at, as the chain stretched toward it is for one out of reach. None
-    when no start slides down to a pose they hold.
+    when no start slides down to a pose they hold. ``slope`` is the strain's gradient (as
+    :attr:`RobustSolver.strain_slope`); None takes it by differences.
 
     From each start the pose first slides down the ``strain`` (its steepest way, any joint)
     until the motors hold it; then damped least-squares steps bring the end toward the target,
@@ -1223,7 +1244,7 @@ def held_nearest(
     >>> bool(strain(pose) <= HOLDS), round(float(pose[0]), 2)
     (True, 0.47)
     """
-    return _run_out(_held_nearest_steps(skeleton, starts, target, strain))
+    return _run_out(_held_nearest_steps(skeleton, starts, target, strain, _sloped(strain, slope)))
 
 
 def _held_nearest_steps(
@@ -1231,18 +1252,23 @@ def _held_nearest_steps(
     starts: tuple[np.ndarray, ...],
     target: np.ndarray,
     strain: Callable[[np.ndarray], float],
+    slope: _Slope,
 ) -> Generator[int, None, np.ndarray | None]:
     """:func:`held_nearest` a step at a time, so that a caller can spread the work over
     calls: each step yields how many times it asked the ``strain``, and the pose is the
     generator's return value."""
-    counted, asked = _counting(strain)
+    counted, counted_slope, asked = _counting(strain, slope)
     best, best_error = None, math.inf
     for start in starts:
         pose = skeleton.clamp(np.array(start, dtype=float))
-        held, now = yield from _asking(_slid_down(skeleton, pose, counted, False), asked)
+        held, now = yield from _asking(
+            _slid_down(skeleton, pose, counted, counted_slope, False), asked
+        )
         if now > HOLDS:
             continue
-        held = yield from _asking(_held_toward(skeleton, held, target, counted), asked)
+        held = yield from _asking(
+            _held_toward(skeleton, held, target, counted, counted_slope), asked
+        )
         error = _error(skeleton, held, target)
         if error < best_error:
             best, best_error = held, error
@@ -1250,16 +1276,25 @@ def _held_nearest_steps(
 
 
 def _counting(
-    strain: Callable[[np.ndarray], float],
-) -> tuple[Callable[[np.ndarray], float], list[int]]:
-    """``strain``, and a one-item list that counts how many times it is asked."""
+    strain: Callable[[np.ndarray], float], slope: _Slope
+) -> tuple[Callable[[np.ndarray], float], _Slope, list[int]]:
+    """``strain`` and its ``slope``, and a one-item list that counts how many times the strain
+    is asked: a slope by differences asks it through the counted strain, one in closed form
+    counts as ``SLOPE_STRAINS``."""
     asked = [0]
 
     def counted(angles: np.ndarray) -> float:
         asked[0] += 1
         return strain(angles)
 
-    return counted, asked
+    if isinstance(slope, _Differences):
+        return counted, _Differences(counted), asked
+
+    def counted_slope(angles: np.ndarray, now: float) -> np.ndarray:
+        asked[0] += SLOPE_STRAINS
+        return slope(angles, now)
+
+    return counted, counted_slope, asked
 
 
 def _asking(steps: Generator[None, None, _Out], asked: list[int]) -> Generator[int, None, _Out]:
@@ -1275,15 +1310,36 @@ def _asking(steps: Generator[None, None, _Out], asked: list[int]) -> Generator[i
         before = asked[0]
 
 
-def _strain_slope(
-    pose: np.ndarray, strain: Callable[[np.ndarray], float], now: float
-) -> np.ndarray:
-    """The gradient of ``strain`` at ``pose`` (radians), by forward differences."""
-    return np.array([strain(pose + nudge) - now for nudge in 1e-4 * np.eye(len(pose))]) / 1e-4
+_Slope = Callable[[np.ndarray, float], np.ndarray]
+"""The gradient of a strain at a pose (radians), given the strain there."""
+
+
+class _Differences:
+    """The gradient of ``strain`` by forward differences: one strain asked per joint."""
+
+    def __init__(self, strain: Callable[[np.ndarray], float]) -> None:
+        self.strain = strain
+
+    def __call__(self, pose: np.ndarray, now: float) -> np.ndarray:
+        nudges = 1e-4 * np.eye(len(pose))
+        return np.array([self.strain(pose + nudge) - now for nudge in nudges]) / 1e-4
+
+
+def _sloped(
+    strain: Callable[[np.ndarray], float], slope: Callable[[np.ndarray], np.ndarray] | None
+) -> _Slope:
+    """The gradient of ``strain``: ``slope`` where given, else by differences."""
+    if slope is None:
+        return _Differences(strain)
+    return lambda pose, now: slope(pose)
 
 
 def _held_toward(
-    skeleton: Skeleton, pose: np.ndarray, target: np.ndarray, strain: Callable[[np.ndarray], float]
+    skeleton: Skeleton,
+    pose: np.ndarray,
+    target: np.ndarray,
+    strain: Callable[[np.ndarray], float],
+    slope: _Slope,
 ) -> Generator[None, None, np.ndarray]:
     """Damped least-squares steps from ``pose`` (held within ``HOLDS``) toward ``target``
     (px), each kept within ``HOLDS``, until the end comes no nearer, a step at a time: the
@@ -1305,11 +1361,11 @@ def _held_toward(
             # error (the Jacobian transpose's) less its part that raises the strain. That
             # part taken from the least-squares step can leave a step that turns away from
             # the target.
-            slope = _strain_slope(pose, strain, now)
+            rising = slope(pose, now)
             down = jac.T @ (target - end)
-            rise = float(down @ slope)
+            rise = float(down @ rising)
             if rise > 0.0:
-                down = down - rise / float(slope @ slope) * slope
+                down = down - rise / float(rising @ rising) * rising
             largest = float(np.abs(down).max())
             if largest < 1e-12:
                 break

@@ -337,6 +337,28 @@ def test_tree_loads_match_virtual_work_wherever_the_roots_sit(parents, seed):
     np.testing.assert_allclose(loads.forces, forces, rtol=1e-6, atol=1e-6 * np.abs(forces).max())
 
 
+@pytest.mark.parametrize("parents", [None, Y_PARENTS, TREE_PARENTS], ids=["chain", "y", "tree"])
+@pytest.mark.parametrize("seed", range(3))
+def test_the_held_slope_is_how_each_joint_s_turn_changes_a_held_load(parents, seed):
+    # Against central differences of the loads themselves: each joint turned (with all that
+    # hangs from it) a little either way, the world angles it carries turned with it.
+    chain = _tree(np.arange(8) - 1 if parents is None else parents, seed)
+    n = chain.count
+    rng = np.random.default_rng(20 + seed)
+    q = rng.uniform(-2, 2, n)
+    gravity = np.array([35.0, -GRAVITY])
+    for joint in range(n):
+
+        def held(turns, joint=joint):
+            return Pose(chain, chain.along(turns)).loads(gravity=gravity).torques[joint]
+
+        nudges = 1e-5 * np.eye(n)
+        differences = [(held(q + d) - held(q - d)) / 2e-5 for d in nudges]
+        slope = Pose(chain, chain.along(q)).held_slope(joint, gravity)
+        np.testing.assert_allclose(slope, differences, rtol=1e-5, atol=1e-5 * GRAVITY)
+        assert np.any(slope != 0.0)
+
+
 def test_tree_inertia_is_everything_beyond_each_joint_held_rigid():
     chain = _tree(TREE_PARENTS, seed=5)
     q = np.random.default_rng(5).uniform(-2, 2, chain.count)

@@ -179,6 +179,38 @@ def test_the_float_servo_commands_what_the_numpy_servo_does(parents, sections, t
         assert np.array_equal(fast.stalled, slow.stalled)
 
 
+@pytest.mark.parametrize("n", [5, 40], ids=["floats", "numpy"])
+def test_the_strain_slope_is_how_the_strain_changes_as_each_joint_turns(n):
+    # Against central differences of the strain itself (over floats up to FLOAT_LINKS, over
+    # numpy beyond), at poses where one joint strains clearly most.
+    rng = np.random.default_rng(n)
+    inertia = _random_links(rng, n, None)
+    servo = Servo(
+        inertia, max_torque=rng.uniform(2e4, 2e5, n), max_speed=np.full(n, 3.0), gain=12.0
+    )
+    gravity = (20.0, -900.0)
+    checked = 0
+    for _ in range(8):
+        turns = rng.uniform(-1.5, 1.5, n)
+        shares = np.abs(Pose(inertia, inertia.along(turns)).loads(gravity=gravity).torques)
+        shares = np.sort(shares / servo.max_torque)
+        if shares[-1] - shares[-2] < 0.05:
+            continue  # the largest is a corner of the strain: no one slope there
+        nudges = 1e-6 * np.eye(n)
+        differences = [
+            (
+                servo.strain(inertia.along(turns + d), gravity)
+                - servo.strain(inertia.along(turns - d), gravity)
+            )
+            / 2e-6
+            for d in nudges
+        ]
+        slope = servo.strain_slope(inertia.along(turns), gravity)
+        np.testing.assert_allclose(slope, differences, rtol=1e-4, atol=1e-6)
+        checked += 1
+    assert checked >= 4
+
+
 def _strain_the_base(floats, goal_side, gravity):
     """A two-link servo whose outer joint's big move needs more torque at the base than it
     has, for 0.17 s (beyond STALL_TIME): the base sits at its limit, the torque pointing the

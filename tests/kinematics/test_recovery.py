@@ -805,21 +805,42 @@ def _two_link_loads(base: np.ndarray, elbow: np.ndarray) -> tuple[np.ndarray, np
     return tip, loads
 
 
-@pytest.mark.parametrize("name", NAMES)
-def test_a_target_the_motors_cannot_hold_the_end_at_gets_the_nearest_pose_they_hold(name):
-    # Out to the right, just below the base: held there, the arm asks 1.6 times the base's
-    # torque. Every restart fails; the answer is then the pose nearest the target that the
-    # motors hold, within a pixel of the best of every pose on a 0.25 deg grid, a failure
-    # cached like a target out of reach.
-    arm = Skeleton.chain([100.0, 100.0], limits=[(-2.6, 2.6)] * 2, base_angle=-PI / 2)
-    limits = np.array([1.2e5, 1.0e5])
+def _two_link_strain(limits: np.ndarray):
+    """The strain of :func:`_two_link_loads` under torque ``limits``, and its slope."""
 
     def strain(angles: np.ndarray) -> float:
         return float(np.max(np.abs(_two_link_loads(*angles)[1]) / limits))
 
+    def slope(angles: np.ndarray) -> np.ndarray:
+        a0 = angles[0] - PI / 2
+        a1 = a0 + angles[1]
+        loads = _two_link_loads(*angles)[1]
+        worst = int(np.argmax(np.abs(loads) / limits))
+        # Each load's change as the base turns (both links with it) and as the elbow turns.
+        turned = [
+            [-1000.0 * (150.0 * np.sin(a0) + 50.0 * np.sin(a1)), -50000.0 * np.sin(a1)],
+            [-50000.0 * np.sin(a1), -50000.0 * np.sin(a1)],
+        ]
+        return np.sign(loads[worst]) / limits[worst] * np.array(turned[worst])
+
+    return strain, slope
+
+
+@pytest.mark.parametrize("closed", [False, True], ids=["differences", "closed-form"])
+@pytest.mark.parametrize("name", NAMES)
+def test_a_target_the_motors_cannot_hold_the_end_at_gets_the_nearest_pose_they_hold(name, closed):
+    # Out to the right, just below the base: held there, the arm asks 1.6 times the base's
+    # torque. Every restart fails; the answer is then the pose nearest the target that the
+    # motors hold, within a pixel of the best of every pose on a 0.25 deg grid, a failure
+    # cached like a target out of reach; the same whether the strain's slope is known in
+    # closed form or taken by differences.
+    arm = Skeleton.chain([100.0, 100.0], limits=[(-2.6, 2.6)] * 2, base_angle=-PI / 2)
+    limits = np.array([1.2e5, 1.0e5])
+    strain, slope = _two_link_strain(limits)
     target = np.array([190.0, -30.0])
     robust = RobustSolver(arm, name)
     robust.strain = strain
+    robust.strain_slope = slope if closed else None
     pose = np.zeros(2)
     answers = [robust.solve(pose, target, tolerance=TOLERANCE) for _ in range(80)]
     sol = answers[-1]
@@ -856,6 +877,23 @@ def test_the_slides_of_a_search_for_a_held_pose_are_spread_over_calls():
         most = max(most, asked[0] - before)
     assert sol.status is SolveStatus.FAILURE and strain(sol.angles) <= HOLDS
     assert most < 300
+
+
+def test_the_strain_s_slope_in_closed_form_finds_the_pose_differences_find_asking_less():
+    arm = Skeleton.chain([100.0, 100.0], limits=[(-2.6, 2.6)] * 2, base_angle=-PI / 2)
+    strain, slope = _two_link_strain(np.array([1.2e5, 1.0e5]))
+    asked = [0]
+
+    def counted(angles: np.ndarray) -> float:
+        asked[0] += 1
+        return strain(angles)
+
+    target, starts = np.array([190.0, -30.0]), (np.zeros(2), np.array([0.4, 1.0]))
+    differenced = held_nearest(arm, starts, target, counted)
+    by_differences, asked[0] = asked[0], 0
+    closed = held_nearest(arm, starts, target, counted, slope)
+    np.testing.assert_allclose(closed, differenced, atol=2e-3)
+    assert asked[0] < by_differences
 
 
 def test_the_nearest_pose_the_motors_hold_is_none_when_no_start_slides_to_one():
