@@ -80,9 +80,6 @@ the answer."""
 _AT_LIMIT: Final = 1.0 - 1e-6
 """Share of its torque limit past which a joint counts as at its limit."""
 
-_BRACE_RAD: Final = 1e-9
-"""How far beyond a braced joint's angle (back into its range) its stop is set, radians: pymunk
-acts only on a joint strictly past its bound, and pushes back from this little unnoticeably."""
 _CHAIN_GROUP: Final = 1
 _LINK_TYPE: Final = 1
 """The collision type of every link's shape."""
@@ -771,15 +768,20 @@ class _Stops:
             if not (low or ahead > upper[i]):
                 continue
             moved = angle + dt * rate
-            # A joint already past its stop is the limit joint's to push back, not to brace;
-            # strictly past the bound pymunk compares with, or the limit stays idle.
+            # A joint already past its stop is the limit joint's to push back, not to brace.
+            # The braced stop is halfway along this step's travel: a contact's own correction of
+            # its overlap moves the bodies in the same step, and a joint the floor held back
+            # landed short of where its velocity alone put it, short of a stop braced there,
+            # so the limit stayed idle and the next step carried the joint 3.9 deg past its
+            # real stop. Anywhere in the travel's second half, the joint is past the braced one.
+            halfway = angle + 0.5 * dt * rate
             if low:
                 if moved >= lower[i]:
                     braced.append(i)
-                    joint.min = moved + _BRACE_RAD
+                    joint.min = halfway
             elif moved <= upper[i]:
                 braced.append(i)
-                joint.max = moved - _BRACE_RAD
+                joint.max = halfway
         return braced
 
     def release(self, braced: list[int]) -> None:
