@@ -297,9 +297,9 @@ class Controller:
         return np.array([rate / worst for rate in rates]), False
 
     def _know_strain(self, gravity: tuple[float, float] | np.ndarray) -> None:
-        """Tell a chain's solver what holding a pose still under ``gravity`` (px/s^2) takes of
-        the motors, so that it prefers poses they can hold (see
-        :attr:`RobustSolver.strain`)."""
+        """Tell a chain's solver, and its avoider for the clear answers it finds, what holding
+        a pose still under ``gravity`` (px/s^2) takes of the motors, so that they prefer poses
+        the motors can hold (see :attr:`RobustSolver.strain`)."""
         pull = (float(gravity[0]), float(gravity[1]))
         if pull == self._gravity:
             return
@@ -311,11 +311,14 @@ class Controller:
         solver = self.solver
         if servo is None or not self.skeleton.is_chain or not any(pull):
             solver.strain = solver.strain_slope = None
-            return
-        world = self._skeleton.world_angles
-        solver.strain = lambda angles: servo.strain(world(angles), pull)
-        # The servo's slope is per joint turning everything beyond it: a chain's local angles.
-        solver.strain_slope = lambda angles: servo.strain_slope(world(angles), pull)
+        else:
+            world = self._skeleton.world_angles
+            solver.strain = lambda angles: servo.strain(world(angles), pull)
+            # The servo's slope is per joint turning everything beyond it: a chain's local
+            # angles.
+            solver.strain_slope = lambda angles: servo.strain_slope(world(angles), pull)
+        if self.avoider is not None:
+            self.avoider.clearance.strain = solver.strain
 
     def hold(self, measured: np.ndarray) -> None:
         """Stop pushing: hold the ``measured`` pose (radians) instead of solving, until

@@ -69,7 +69,7 @@ from typing import Final, TypeVar
 
 import numpy as np
 
-from ikgame.kinematics.recovery import SETTLED
+from ikgame.kinematics.recovery import HOLDS, SETTLED
 from ikgame.kinematics.skeleton import Skeleton, tree_points
 from ikgame.kinematics.solver import Solution, SolveStatus
 from ikgame.kinematics.targets import TargetSet, columns
@@ -337,6 +337,11 @@ class Clearance:
         self.radii = radii
         self.obstacles = obstacles
         self.margin = float(margin)
+        self.strain: Callable[[np.ndarray], float] | None = None
+        """What holding a pose still takes of the motors, as
+        :attr:`~ikgame.kinematics.recovery.RobustSolver.strain`, if known: a clear answer
+        they cannot hold (past ``HOLDS``) is taken only when no clear one they hold is found
+        (see :meth:`clear_answer`)."""
         caps = obstacles.capsules
         self._a = caps[:, :2]
         self._b = caps[:, 2:4]
@@ -689,7 +694,11 @@ class Clearance:
         no seed found one.
 
         Among the seeds' polished poses, the first the skeleton can turn to in a straight clear
-        line wins; otherwise the clear one nearest ``measured`` in joint space. Poses with a joint
+        line wins; otherwise the clear one nearest ``measured`` in joint space. With
+        :attr:`strain` known, poses the motors cannot hold (past ``HOLDS``) count only when no
+        seed arrives at one they hold: under a ceiling, six weakening links hanging were sent
+        to a clear pose asking 1.09 of a motor where the solver's own asked 0.95, sagged off it
+        and ended `blocked` 62 px from the target. Poses with a joint
         on its stop (within ``STOP_ROOM``, see :meth:`off_stops`) count only when no seed
         arrives off the stops: a fold pressed against a stop under a shelf, a straight turn
         away, left five links a 3 s route from a target a little deeper in. When no seed of a
@@ -729,6 +738,9 @@ class Clearance:
         # The first answer on a stop the chain can turn to in a straight clear line: taken only
         # if no answer off the stops is found.
         pressed: np.ndarray | None = None
+        # Answers the motors cannot hold: taken only if none they hold is found.
+        strained: list[np.ndarray] = []
+        strain = self.strain
         for drawn in (False, True):
             if drawn:
                 # Drawing and measuring the pool of random seeds, counted as that many poses
@@ -745,6 +757,9 @@ class Clearance:
                     if self.is_clear(sol.angles):
                         short.append(sol)
                     continue
+                if strain is not None and strain(sol.angles) > HOLDS:
+                    strained.append(sol.angles)
+                    continue
                 free = self.off_stops(sol.angles)
                 if (free or pressed is None) and (yield from self._checking(measured, sol.angles)):
                     if free:
@@ -757,6 +772,7 @@ class Clearance:
             return min(roomy, key=lambda pose: float(np.abs(pose - measured).sum())), False, False
         if pressed is not None:
             return pressed, True, False
+        found = found or strained
         if not found and short and not isinstance(target, TargetSet):
             # Close by an obstacle the polish can stall a px short, the pull on the end balanced
             # by the push off the obstacle. From the nearest such pose the end is taken onto the

@@ -259,6 +259,25 @@ def test_clear_answer_reaches_under_the_shelf_and_gives_up_inside_an_obstacle():
     assert room.clear_answer(measured, measured, inside_the_shelf, 0.5) is None
 
 
+def test_clear_answer_is_one_the_motors_hold_when_a_seed_arrives_at_one():
+    # Two links and a floor far below: the target is reached with the elbow bent either way,
+    # both clear. A stand-in strain the motors hold only with the elbow bent down (negative):
+    # from the elbow-up answer, the clear answer is the elbow-down one; with no pose they hold,
+    # the clear one they do not.
+    arm = Skeleton.chain([100.0, 100.0], base_angle=0.0, limits=[(-2.6, 2.6)] * 2)
+    floor = Obstacles.from_arrays(np.array([[-500.0, -300.0, 500.0, -300.0, 0.0]]), NO_CIRCLES)
+    room = Clearance(arm, np.full(2, 5.0), floor)
+    target = np.array([120.0, 60.0])
+    up = room.polish(np.array([-0.3, 1.2]), target).angles
+    assert up[1] > 0.0 and room.misses(up, target)[0] <= 0.5
+    assert room.clear_answer(up, up, target, 0.5)[1] > 0.0
+    room.strain = lambda angles: 2.0 if angles[1] > 0.0 else 0.5
+    held = room.clear_answer(up, up, target, 0.5)
+    assert held[1] < 0.0 and room.misses(held, target)[0] <= 0.5 and room.is_clear(held)
+    room.strain = lambda angles: 2.0
+    assert room.clear_answer(up, up, target, 0.5)[1] > 0.0
+
+
 def _assert_clear_route(room, start, goal, way):
     """``way`` ends on ``goal`` and each of its straight pieces from ``start`` on is clear."""
     assert way is not None
