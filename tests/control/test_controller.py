@@ -349,10 +349,10 @@ def test_an_arm_lifted_from_a_stretched_rest_sets_off_for_a_pose_held_with_margi
 
 
 def test_a_way_round_rocks_turns_its_corners_on_the_move_where_the_chain_stays_clear():
-    # Five long links from beyond the right rock to low in front of the left one: a way of six
-    # via poses, none of whose next pieces is clear from the chain until it is nearly on the
-    # via pose before. Stopping at every one, CCD's arm arrived 4.4 s in, too late to hold
-    # the target for its second inside the 5 s timeout.
+    # Five long links from beyond the right rock to low in front of the left one: a way of
+    # seven pieces, most of whose next pieces are blocked from the chain until it is nearly on
+    # the via pose before. Braking to rest at those corners, CCD's arm arrived 4.4 s in, too
+    # late to hold the target the 1 s the step asks inside its 5 s timeout.
     sim = _stress_simulation("66_round_rocks_low_gaps", "ccd")
     while sim.script.step_index < 5:
         sim.step()
