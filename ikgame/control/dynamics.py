@@ -273,10 +273,8 @@ class Pose:
         """
         chain = self.chain
         tree = chain._tree
-        joints = tree.along(self.links) - self.links
-        sums = tree.beyond(chain.masses[:, None] * (joints + self.halves))
-        sums -= chain.mass_beyond[:, None] * joints
-        turned = sums @ np.asarray(gravity, dtype=float)
+        joints, _, first = self._first_moments()
+        turned = (first - chain.mass_beyond[:, None] * joints) @ np.asarray(gravity, dtype=float)
         alone = np.zeros(chain.count)
         alone[joint] = 1.0
         # Joints on the way from the base to ``joint`` (beyond() of its indicator), and those
@@ -287,14 +285,8 @@ class Pose:
         """(n,) moment of inertia about each joint of everything beyond it, held rigid,
         mass px^2: what the joint's motor turns when it moves alone."""
         chain = self.chain
-        tree = chain._tree
-        # Joints relative to the base, roots' offsets left out: each sum below stays within
-        # one root's links, and moves with them.
-        joints = tree.along(self.links) - self.links
-        centres = joints + self.halves
-        m = chain.masses
-        first = tree.beyond(m[:, None] * centres)
-        second = tree.beyond(m * np.einsum("ij,ij->i", centres, centres))
+        joints, centres, first = self._first_moments()
+        second = chain._tree.beyond(chain.masses * np.einsum("ij,ij->i", centres, centres))
         # sum_j m_j |c_j - p_i|^2, expanded so that it is three cumulative sums.
         spread = (
             second
@@ -302,6 +294,16 @@ class Pose:
             + chain.mass_beyond * np.einsum("ij,ij->i", joints, joints)
         )
         return chain.moment_beyond + np.maximum(spread, 0.0)
+
+    def _first_moments(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(n, 2) each joint's place and each link's centre, relative to the base (roots'
+        offsets left out: each sum over what hangs from a joint stays within one root's links,
+        and moves with them), and the mass-weighted sum of the centres beyond each joint."""
+        chain = self.chain
+        tree = chain._tree
+        joints = tree.along(self.links) - self.links
+        centres = joints + self.halves
+        return joints, centres, tree.beyond(chain.masses[:, None] * centres)
 
 
 def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:

@@ -760,7 +760,7 @@ class RobustSolver:
             # from a stretched rest, where no straight way holds), the plain answer it is,
             # unless it leaves them less than the margin at rest (see _held_way).
             search, iterations = self._searched(plain, target, tol, seeds(), holds, way(HOLDS))
-            return self._held_way(plain, goal, target, search, iterations, holds(plain.angles))
+            return self._held_way(plain, goal, target, search, iterations)
         return None
 
     def _held(
@@ -852,14 +852,13 @@ class RobustSolver:
         target: np.ndarray,
         search: _Search,
         iterations: int,
-        held: bool,
     ) -> Solution | None:
         """After a plain solve whose answer the motors hold (or one on its way) but not the
         way to it, the ``search`` for an arrival they hold through poses they hold: it replaces
         the plain answer. The plain answer serves while the search goes on; once it has tried
-        every seed, None (the plain answer is taken as any other), but where the plain answer
-        is not ``held`` with the margin the motors rest with (:data:`HOLDS`) and the search
-        found an arrival that is (whose way they do not hold either), that arrival.
+        every seed, None (the plain answer is taken as any other), but where the motors do not
+        hold the plain answer with the margin they rest with (:data:`HOLDS`) and the search
+        found an arrival they do (whose way they do not hold either), that arrival.
 
         No straight way holds for an arm lifted from a stretched rest, whichever answer it
         lifts to; one that leaves the motors no margin at rest also leaves them none to move
@@ -878,7 +877,8 @@ class RobustSolver:
             return replace(plain, iterations=iterations)
         self._way_searched = goal
         self._search = None
-        if held or search.fallback is None:
+        strain = self.strain
+        if search.fallback is None or strain is None or strain(plain.angles) <= HOLDS:
             return None
         error = _error(self._skeleton, search.fallback, target)
         answer = Solution(search.fallback, SolveStatus.SUCCESS, iterations, error)
