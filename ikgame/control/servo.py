@@ -32,6 +32,7 @@ Units: radians, rad/s, px, s, torques mass px^2/s^2.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Final
 
@@ -61,6 +62,11 @@ it less at the pose it is in now."""
 FLOAT_LINKS: Final = 30
 """Chains (and trees) up to this many links are driven over Python floats, longer ones over
 numpy arrays: the same numbers either way, whichever is faster."""
+
+PACE_STEPS: Final = (0.25, 0.5, 0.75, 1.0)
+"""Where on their way (as a share of it) the joints a servo bringing them in together could
+wait for one are checked for the load they would put on it, running on ahead (see
+:func:`_paced`)."""
 
 SECTION_LINKS: Final = 30
 """Chains (and trees) longer than this, when a joint runs out of torque, keep the wanted
@@ -239,7 +245,8 @@ class Servo:
         clear. Eased off its line, twenty links following their way out from under a shelf
         caught on it. ``together`` closes every joint's error in the same time, the longest any
         joint needs at its own speed (see :func:`_together`): the chain keeps to the straight
-        line in joint space to its goal.
+        line in joint space to its goal, the joints waiting for one that cannot keep up where
+        running on without it would load it past its torque (see :func:`_paced`).
         """
         if self._floats is not None:
             return self._command_floats(
@@ -304,7 +311,21 @@ class Servo:
         )
         closing = np.sign(error) * speed
         if together:
-            closing = np.array(_together(error.tolist(), closing.tolist()))
+            errors, closings, now = error.tolist(), closing.tolist(), velocities.tolist()
+            reach = _paced(
+                errors,
+                closings,
+                now,
+                _reach(errors, now, up.tolist(), down.tolist(), floor.tolist(), dt),
+                hold.torques.tolist(),
+                self._limits,
+                lambda turns: (
+                    Pose(self.inertia, world_angles + along(np.array(turns)))
+                    .loads(gravity=gravity)
+                    .torques.tolist()
+                ),
+            )
+            closing = np.array(_together(errors, closings, reach))
         # Each joint's profile brakes it alone; stopping them all at once also loads the joints
         # nearer the base with the others' deceleration. Stop together, by the time the first
         # of them must have stopped (at a constant deceleration), within the braking share:
@@ -470,7 +491,19 @@ class Servo:
             closing.append(c)
         self._carried, self._stalled, self._velocities = carried, sides, now
         if together:
-            closing = _together(errors, closing)
+            floors = [low / i for low, i in zip(self._floors, inertia, strict=True)]
+            reach = _paced(
+                errors,
+                closing,
+                now,
+                _reach(errors, now, up, down, floors, dt),
+                held,
+                limits,
+                lambda turns: tree.pose(world_angles + np.array(tree.along(turns))).loads(
+                    gravity=pull
+                )[0],
+            )
+            closing = _together(errors, closing, reach)
         stop_in, closing_total = _stopping(errors, closing)
         # The loads of braking and of spinning are evaluated only when a bound on them (see
         # _Quiet) leaves any joint short of room: otherwise their factor is 1, exactly.
@@ -556,29 +589,112 @@ def _stopping(errors: list[float], closing: list[float]) -> tuple[float, float]:
     return stop_in, closing_total
 
 
-def _together(errors: list[float], closing: list[float]) -> list[float]:
+def _together(
+    errors: list[float], closing: list[float], reach: list[float] | None = None
+) -> list[float]:
     """Each joint's closing velocity (rad/s) slowed so that every joint closes its error
-    (radians) in the same time: the longest any moving joint needs at its own velocity. A
-    joint that is not closing (stalled, or on its goal) keeps its velocity and does not count.
+    (radians) in the same time: the longest any moving joint needs at its own velocity, or at
+    the most it can close at by the next tick (``reach``, rad/s, if given), if less. A joint
+    that is not closing (stalled, or on its goal) keeps its velocity and does not count.
 
     Each joint's own velocity is the most it may have (its speed limit, its gain, and what it
     can brake from), so none goes faster. Near the goal every joint's velocity is its gain times
     its error, one time for all, and nothing changes. Far from it the light joints at the end
     of a chain get up to speed sooner than the heavy ones near the base, and each alone would
     arrive first: the poses on the way, the outer joints bent and the inner ones not yet, can
-    ask more than a weak motor has, where the straight line to the goal does not.
+    ask more than a weak motor has, where the straight line to the goal does not. Paced by
+    what each can reach, the others wait for one whose torque is nearly spent holding the chain.
 
     >>> _together([1.0, 0.1, 0.0], [2.0, 1.0, 0.0])
     [2.0, 0.2, 0.0]
+    >>> _together([1.0, 0.1, 0.0], [2.0, 1.0, 0.0], [0.5, 3.0, 0.0])
+    [0.5, 0.05, 0.0]
     """
     longest = 0.0
-    for e, c in zip(errors, closing, strict=True):
+    for index, (e, c) in enumerate(zip(errors, closing, strict=True)):
         if abs(c) > 1e-9:
-            time = abs(e) / abs(c)
+            speed = abs(c)
+            if reach is not None and reach[index] < speed:
+                speed = reach[index]
+            time = abs(e) / speed if speed > 0.0 else math.inf
             longest = time if time > longest else longest
     if longest == 0.0:
         return closing
     return [e / longest if abs(c) > 1e-9 else c for e, c in zip(errors, closing, strict=True)]
+
+
+def _reach(
+    errors: list[float],
+    velocities: list[float],
+    up: list[float],
+    down: list[float],
+    floors: list[float],
+    dt: float,
+) -> list[float]:
+    """The most each joint can close its error at (rad/s) by the next tick: its velocity
+    toward its goal (none, if it moves away) and what its torque can add in a tick (``up``
+    and ``down``, rad/s^2, the change it can make each way, at least its ``floors``: as the
+    braking plans, a joint whose load takes all its torque here moves at all, and the motion
+    changes its load)."""
+    reach = []
+    for e, v, u, d, low in zip(errors, velocities, up, down, floors, strict=True):
+        toward = v if e > 0.0 else -v
+        gain = u if e > 0.0 else d
+        reach.append((toward if toward > 0.0 else 0.0) + (gain if gain > low else low) * dt)
+    return reach
+
+
+def _paced(
+    errors: list[float],
+    closing: list[float],
+    velocities: list[float],
+    reach: list[float],
+    held: list[float],
+    limits: list[float],
+    loads_at: Callable[[list[float]], list[float]],
+) -> list[float] | None:
+    """``reach`` (see :func:`_reach`), or None for no pace by it: ``reach`` where the joint
+    it holds back the most, not carried away from its goal (``velocities``, rad/s), has the
+    torque to hold its load here (``held``, the static loads; ``limits``, the torque limits)
+    but not the load the others would put on it, running on ahead toward their goals while
+    it stays (``loads_at(turns)``: the static loads with the joints turned so much, radians,
+    checked at :data:`PACE_STEPS` of the way).
+
+    Waiting for the joint whose torque holding the arm nearly spends keeps the chain on the
+    straight line in joint space the motors were checked to hold along: an arm lifted over
+    the top from out to the right (`69_heavy_gravity_weak_three`) whose far joints unfolded
+    first grew longer than its base could lift, and lay on the floor. Where the far joints
+    running on only lighten its load (folding in), or it cannot hold its load anyway (an arm
+    sagging at its base's limit), or it is still carried the other way (by the swing toward
+    the goal before), waiting for it keeps the load on: paced by the base all the way, the
+    five weak links of `29_five_weak_links` took 2.6 s to swing up for their second target,
+    and missed it.
+
+    >>> lever = lambda turns: [1.0 + turns[1], 0.0]  # the far joint turning on loads the base
+    >>> rest = ([0.1, 3.0], [1.0, 0.0], [1.5, 1.0], lever)  # reach, held, limits, loads_at
+    >>> _paced([1.0, 1.0], [2.0, 2.0], [0.0, 0.0], *rest)
+    [0.1, 3.0]
+    >>> _paced([1.0, -1.0], [2.0, -2.0], [0.0, 0.0], *rest) is None  # it turns the other way
+    True
+    >>> _paced([1.0, 1.0], [2.0, 2.0], [-0.5, 0.0], *rest) is None  # the base carried away
+    True
+    """
+    longest, pacer = 0.0, -1
+    for index, (e, c, r) in enumerate(zip(errors, closing, reach, strict=True)):
+        if abs(c) > 1e-9 and r < abs(c):
+            time = abs(e) / r if r > 0.0 else math.inf
+            if time > longest:
+                longest, pacer = time, index
+    if pacer < 0:
+        return None
+    side, limit = (1.0 if errors[pacer] > 0.0 else -1.0), limits[pacer]
+    if side * velocities[pacer] < 0.0 or side * held[pacer] > limit:
+        return None
+    others = [0.0 if index == pacer else e for index, e in enumerate(errors)]
+    for step in PACE_STEPS:
+        if side * loads_at([step * e for e in others])[pacer] > limit:
+            return reach
+    return None
 
 
 class _Quiet:

@@ -144,6 +144,21 @@ def test_a_weak_joint_lowering_an_arm_brakes_for_the_load_it_meets_on_the_way():
     assert past <= 0.05 * approach
 
 
+@pytest.mark.parametrize("solver", ["fabrik", "dls"])
+def test_joints_brought_in_together_wait_for_a_base_whose_torque_holding_the_arm_takes(solver):
+    # Three links in gravity of 2700 px/s^2, from (190, 150) on the right to (-200, 150) on
+    # the left, over the top: holding the arm out to the right takes 0.92 of the base's torque,
+    # and the straight line in joint space to the answer lifts it through poses the motors hold.
+    # Paced by their own speeds, the light far joints unfolded while the base could not yet
+    # lift, the arm grew longer than the base could hold, and it lay on the floor `blocked`.
+    path = Path(__file__).parents[2] / "benchmarks" / "stress_levels"
+    level = load_level(path / "69_heavy_gravity_weak_three.toml")
+    sim = Simulation(level, solver=solver, record=False)
+    while sim.script.step_index < 3:
+        sim.step()
+    assert sim.script.outcomes[2].reached
+
+
 @pytest.mark.parametrize("tick_rate", [120, 480])
 def test_long_chain_timing_does_not_depend_on_the_tick_rate(tick_rate):
     def time_to_reach(rate):
@@ -447,10 +462,10 @@ _FOLDED_RATES += [-1.4, -1.31, -1.05, -0.76, -0.58, -0.64, -0.81, -0.76, -0.5, -
 def test_motors_beyond_a_base_the_others_braking_carries_on_add_no_torque(floats, toward):
     # The motion wanted of the chain, the far joints' braking with the base's own, takes 6
     # times the base's limit the way it turns: at its limit, and asking to brake with all it
-    # has, the base is carried on toward its goal. The far motors, correcting their rates with their spare torque, pushed it on
-    # further: it sped up to 2.8 rad/s and stopped 2.1 deg past its goal (the tip 10% of the
-    # approach past the target). With its goal behind it the base is turning back, which is
-    # no overrun: the far motors keep their budgets.
+    # has, the base is carried on toward its goal. The far motors, correcting their rates with
+    # their spare torque, pushed it on further: it sped up to 2.8 rad/s and stopped 2.1 deg
+    # past its goal (the tip 10% of the approach past the target). With its goal behind it the
+    # base is turning back, which is no overrun: the far motors keep their budgets.
     link = {"length": 15.0, "mass": 0.3, "limits": [-120.0, 120.0], "max_torque": 4.0e6}
     servo = Simulation(_level([{**link, "repeat": 20}], [{"wait": 1.0}]), record=False)
     servo = servo.controller.servo
