@@ -311,20 +311,23 @@ class Servo:
         )
         closing = np.sign(error) * speed
         if together:
-            errors, closings, now = error.tolist(), closing.tolist(), velocities.tolist()
-            reach = _paced(
-                errors,
-                closings,
-                now,
-                _reach(errors, now, up.tolist(), down.tolist(), floor.tolist(), dt),
-                hold.torques.tolist(),
-                self._limits,
-                lambda turns: (
-                    Pose(self.inertia, world_angles + along(np.array(turns)))
-                    .loads(gravity=gravity)
-                    .torques.tolist()
-                ),
-            )
+            errors, closings, reach = error.tolist(), closing.tolist(), None
+            if gravity[0] or gravity[1]:
+                # Without gravity no pose loads a joint, and none is waited for (see _paced).
+                now = velocities.tolist()
+                reach = _paced(
+                    errors,
+                    closings,
+                    now,
+                    _reach(errors, now, up.tolist(), down.tolist(), floor.tolist(), dt),
+                    hold.torques.tolist(),
+                    self._limits,
+                    lambda turns: (
+                        Pose(self.inertia, world_angles + along(np.array(turns)))
+                        .loads(gravity=gravity)
+                        .torques.tolist()
+                    ),
+                )
             closing = np.array(_together(errors, closings, reach))
         # Each joint's profile brakes it alone; stopping them all at once also loads the joints
         # nearer the base with the others' deceleration. Stop together, by the time the first
@@ -491,18 +494,21 @@ class Servo:
             closing.append(c)
         self._carried, self._stalled, self._velocities = carried, sides, now
         if together:
-            floors = [low / i for low, i in zip(self._floors, inertia, strict=True)]
-            reach = _paced(
-                errors,
-                closing,
-                now,
-                _reach(errors, now, up, down, floors, dt),
-                held,
-                limits,
-                lambda turns: tree.pose(world_angles + np.array(tree.along(turns))).loads(
-                    gravity=pull
-                )[0],
-            )
+            reach = None
+            if pull[0] or pull[1]:
+                # Without gravity no pose loads a joint, and none is waited for (see _paced).
+                floors = [low / i for low, i in zip(self._floors, inertia, strict=True)]
+                reach = _paced(
+                    errors,
+                    closing,
+                    now,
+                    _reach(errors, now, up, down, floors, dt),
+                    held,
+                    limits,
+                    lambda turns: tree.pose(world_angles + np.array(tree.along(turns))).loads(
+                        gravity=pull
+                    )[0],
+                )
             closing = _together(errors, closing, reach)
         stop_in, closing_total = _stopping(errors, closing)
         # The loads of braking and of spinning are evaluated only when a bound on them (see
@@ -679,14 +685,17 @@ def _paced(
     >>> _paced([1.0, 1.0], [2.0, 2.0], [-0.5, 0.0], *rest) is None  # the base carried away
     True
     """
-    longest, pacer = 0.0, -1
+    longest, pacer, own = 0.0, -1, 0.0
     for index, (e, c, r) in enumerate(zip(errors, closing, reach, strict=True)):
-        if abs(c) > 1e-9 and r < abs(c):
-            time = abs(e) / r if r > 0.0 else math.inf
-            if time > longest:
-                longest, pacer = time, index
-    if pacer < 0:
-        return None
+        if abs(c) > 1e-9:
+            time = abs(e) / abs(c)
+            own = time if time > own else own
+            if r < abs(c):
+                time = abs(e) / r if r > 0.0 else math.inf
+                if time > longest:
+                    longest, pacer = time, index
+    if longest <= own:
+        return None  # no joint's reach holds the others back further than their own speeds
     side, limit = (1.0 if errors[pacer] > 0.0 else -1.0), limits[pacer]
     if side * velocities[pacer] < 0.0 or side * held[pacer] > limit:
         return None
