@@ -608,8 +608,9 @@ def _together(
     its error, one time for all, and nothing changes. Far from it the light joints at the end
     of a chain get up to speed sooner than the heavy ones near the base, and each alone would
     arrive first: the poses on the way, the outer joints bent and the inner ones not yet, can
-    ask more than a weak motor has, where the straight line to the goal does not. Paced by
-    what each can reach, the others wait for one whose torque is nearly spent holding the chain.
+    ask more than a weak motor has, where the straight line to the goal does not. Given each
+    joint's ``reach`` (see :func:`_paced`), the others wait for one whose torque is nearly spent
+    holding the chain.
 
     >>> _together([1.0, 0.1, 0.0], [2.0, 1.0, 0.0])
     [2.0, 0.2, 0.0]

@@ -145,7 +145,7 @@ def test_a_weak_joint_lowering_an_arm_brakes_for_the_load_it_meets_on_the_way():
 
 
 @pytest.mark.parametrize("solver", ["fabrik", "dls"])
-def test_joints_brought_in_together_wait_for_a_base_whose_torque_holding_the_arm_takes(solver):
+def test_joints_brought_in_together_wait_for_a_base_the_arm_s_weight_nearly_spends(solver):
     # Three links in gravity of 2700 px/s^2, from (190, 150) on the right to (-200, 150) on
     # the left, over the top: holding the arm out to the right takes 0.92 of the base's torque,
     # and the straight line in joint space to the answer lifts it through poses the motors hold.
