@@ -15,9 +15,10 @@ width). A chain aims its end effector at a point; a tree aims a
   ``MARGIN`` (the rows of an inequality, active only near contact).
   :meth:`Clearance.clear_answer` polishes a set of seeds (the measured pose, the straight answer,
   the answer with its bends reversed, poses curled either way, ``RANDOM_SEEDS`` random poses
-  within the limits, the nearest the target of ``RANDOM_POOL`` drawn) and keeps the clear one
-  that arrives nearest the measured pose, preferring one the chain can turn to in a straight
-  line, and before either one that keeps every joint ``STOP_ROOM`` off its stops.
+  within the limits, the nearest the target of ``RANDOM_POOL`` drawn, and where none of those
+  arrives clear a chain zig-zagged along the line to its target both ways round) and keeps the
+  clear one that arrives nearest the measured pose, preferring one the chain can turn to in a
+  straight line, and before either one that keeps every joint ``STOP_ROOM`` off its stops.
 - **a clear path** (:meth:`Clearance.route`): the motors turn every joint toward its goal
   together, so the chain moves close to the straight line in joint space. When that line sweeps
   through an obstacle (checked at poses no point of the chain moves more than ``PATH_STEP``
@@ -638,8 +639,47 @@ class Clearance:
         bends reversed (every joint but the roots), the links curled evenly either way, then
         ``RANDOM_SEEDS`` random poses within the limits (seeded): of ``RANDOM_POOL`` drawn, the
         clear ones whose targeted ends come nearest their targets (weighted), then the others
-        by the same measure."""
-        return [*self._deliberate_seeds(measured, answer), *self._random_seeds(target)]
+        by the same measure; last, a chain zig-zagged along the line to its target (see
+        :meth:`_zigzags`), which :meth:`clear_answer` polishes only where no other seed
+        arrives clear."""
+        return [
+            *self._deliberate_seeds(measured, answer),
+            *self._random_seeds(target),
+            *self._zigzags(target),
+        ]
+
+    def _zigzags(self, target: np.ndarray | TargetSet) -> list[np.ndarray]:
+        """A chain folded in a zig-zag, each link turned the same angle off the line from the
+        base to a point ``target`` one way and the next the other, so that the chain spans
+        that line just as far as the target: both ways round (none for a tree, a target set
+        or a target at or beyond the chain's reach).
+
+        A chain in a low corridor reaches a target near its base only folded back and forth
+        along it: from the answer, the curls and the random poses the polish found no clear
+        pose that reached (ten 34 px links in a corridor 58 px high, `71_low_corridor`, rested
+        108 px short of (160, 0), `blocked`); from a zig-zag it needs only to flatten it.
+
+        >>> arm = Skeleton.chain([30.0] * 4)
+        >>> nothing = Obstacles.from_arrays(np.empty((0, 5)), np.empty((0, 3)))
+        >>> room = Clearance(arm, np.full(4, 3.0), nothing)
+        >>> [np.degrees(pose).round(0).tolist() for pose in room._zigzags(np.array([60.0, 0.0]))]
+        [[-60.0, 120.0, -120.0, 120.0], [60.0, -120.0, 120.0, -120.0]]
+        """
+        sk = self.skeleton
+        if not sk.is_chain or isinstance(target, TargetSet) or sk.count < 2:
+            return []
+        point = np.asarray(target, dtype=float) - sk.base
+        distance, reach = float(np.hypot(*point)), float(sk.reach)
+        if distance >= reach:
+            return []
+        off = math.acos(distance / reach)
+        aim = math.atan2(point[1], point[0]) - sk.base_angle
+        seeds = []
+        for side in (1.0, -1.0):
+            pose = np.array([2.0 * off * side * (-1.0) ** (k + 1) for k in range(sk.count)])
+            pose[0] = aim - off * side
+            seeds.append(sk.clamp(pose))
+        return seeds
 
     def _deliberate_seeds(self, measured: np.ndarray, answer: np.ndarray) -> list[np.ndarray]:
         """The seeds of :meth:`seeds` before the random ones."""
@@ -741,17 +781,22 @@ class Clearance:
         # Answers the motors cannot hold: taken only if none they hold is found.
         strained: list[np.ndarray] = []
         strain = self.strain
-        for drawn in (False, True):
-            if drawn:
+        phases = (
+            lambda: self._deliberate_seeds(measured, np.asarray(answer, float)),
+            lambda: self._random_seeds(target),
+            lambda: self._zigzags(target),
+        )
+        for phase, seeds in enumerate(phases):
+            if phase == 2 and (found or pressed is not None or strained):
+                # The zig-zags only where no other seed arrives clear: under a shelf, where
+                # others arrive but none by a clear straight line, a zig-zag that did sent five
+                # links into a fold they could not leave for the next target.
+                break
+            if phase == 1:
                 # Drawing and measuring the pool of random seeds, counted as that many poses
                 # checked: paid only by a search the deliberate seeds did not settle.
                 yield POSE_UNITS * RANDOM_POOL * self.skeleton.count * len(self.obstacles)
-            starts = (
-                self._random_seeds(target)
-                if drawn
-                else self._deliberate_seeds(measured, np.asarray(answer, float))
-            )
-            for start in starts:
+            for start in seeds():
                 sol = yield from self._polishing(start, target, POLISH_ITERATIONS, tolerance, True)
                 if sol.status is not SolveStatus.SUCCESS:
                     if self.is_clear(sol.angles):

@@ -259,6 +259,21 @@ def test_clear_answer_reaches_under_the_shelf_and_gives_up_inside_an_obstacle():
     assert room.clear_answer(measured, measured, inside_the_shelf, 0.5) is None
 
 
+def test_clear_answer_folds_a_chain_in_a_low_corridor_to_reach_near_its_base():
+    # Ten 34 px links pointing along a corridor 58 px high: 340 px of chain into the first
+    # 160 px of it takes a zig-zag of every joint, which no polish of the answer, the curls or
+    # the random poses found.
+    arm = Skeleton.chain([34.0] * 10, limits=[(-2.443, 2.443)] * 10)
+    walls = np.array([[-200.0, -30.0, 560.0, -30.0, 4.0], [-200.0, 36.0, 560.0, 36.0, 4.0]])
+    room = Clearance(arm, np.full(10, 5.0), Obstacles.from_arrays(walls, NO_CIRCLES))
+    stretched = np.zeros(10)
+    for target in ([160.0, 0.0], [180.0, -12.0]):
+        pose = room.clear_answer(stretched, stretched, np.array(target), 1.0)
+        assert pose is not None
+        assert room.is_clear(pose)
+        assert np.hypot(*(room.points(pose)[-1] - target)) <= 1.0
+
+
 def test_clear_answer_is_one_the_motors_hold_when_a_seed_arrives_at_one():
     # Two links and a floor far below: the target is reached with the elbow bent either way,
     # both clear. A stand-in strain the motors hold only with the elbow bent down (negative):
