@@ -69,6 +69,21 @@ def _merge(base: dict, changes: dict) -> dict:
 
 
 @pytest.fixture
+def stress_simulation():
+    """``stress_simulation(name, solver)``: a simulation of the stress level ``name``
+    (``benchmarks/stress_levels/``) with ``solver``, recording nothing."""
+    from ikgame.level.loader import load_level
+    from ikgame.sim import Simulation
+
+    levels = Path(__file__).resolve().parents[1] / "benchmarks" / "stress_levels"
+
+    def simulate(name: str, solver: str) -> Simulation:
+        return Simulation(load_level(levels / f"{name}.toml"), solver=solver, record=False)
+
+    return simulate
+
+
+@pytest.fixture
 def make_level():
     """``make_level(chain={...}, script=[...])``: a small valid level with the given changes."""
 

@@ -1,7 +1,6 @@
 """The controller: solver -> desired angles -> clamped motor rates."""
 
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -250,12 +249,14 @@ def test_between_solves_the_answer_moves_with_a_moving_target():
 
 
 @pytest.mark.parametrize("solver", ["jacobian_transpose", "dls"])
-def test_an_arm_whose_motors_weaken_toward_the_tip_comes_to_rest_on_its_answer(solver):
+def test_an_arm_whose_motors_weaken_toward_the_tip_comes_to_rest_on_its_answer(
+    solver, stress_simulation
+):
     # Six 60 px links in strong gravity, each motor weaker than the last, the target the tip of
     # a pose they hold with 0.9 of their torque: little is left for motion. Solved afresh from
     # the pose in motion, the answer bent the light far joints to make up for the slow near
     # ones, which could not carry that, and the arm sagged and came back (0.7 px and more).
-    sim = _stress_simulation("36_six_weak_links_hanging", solver)
+    sim = stress_simulation("36_six_weak_links_hanging", solver)
     tips = []
     sim.step()
     first = sim.targets["tip"].copy()
@@ -270,7 +271,9 @@ def test_an_arm_whose_motors_weaken_toward_the_tip_comes_to_rest_on_its_answer(s
 
 
 @pytest.mark.parametrize("solver", ["ccd", "dls"])
-def test_weakening_links_far_from_a_strained_goal_come_in_together_and_hold_it(solver):
+def test_weakening_links_far_from_a_strained_goal_come_in_together_and_hold_it(
+    solver, stress_simulation
+):
     # Seven links hanging in strong gravity, motors weaker toward the tip; the first target is
     # the tip of a pose they hold with 0.77 of their torque at most, and so is every pose on
     # the straight line in joint space to it. Each joint alone, the light far joints arrived
@@ -278,27 +281,27 @@ def test_weakening_links_far_from_a_strained_goal_come_in_together_and_hold_it(s
     # the weak motors' torque: they stalled there, the arm hung 65 px off the target (DLS) or
     # swung about it (CCD).
     # Reached within the 5 s timeout and held for the step's 1 s, at rest.
-    last = _first_step_rest(_stress_simulation("40_seven_weak_links_hanging", solver), 4.0)
+    last = _first_step_rest(stress_simulation("40_seven_weak_links_hanging", solver), 4.0)
     assert np.hypot(*(last[-1] - [100.0, -330.0])) < 3.0
 
 
 @pytest.mark.parametrize("solver", ["jacobian_transpose", "fabrik"])
-def test_a_goal_the_motors_hold_only_just_is_come_in_to_together(solver):
+def test_a_goal_the_motors_hold_only_just_is_come_in_to_together(solver, stress_simulation):
     # Six weakening links hanging; the solver's answer for the first target asks 0.92 of the
     # weak motors, and no pose on the straight line to it asks more. Each joint alone, the
     # light far joints arrived first, the pose on the way asked up to 1.25, and the arm
     # collapsed and was held blocked 130 to 350 px off.
-    sim = _stress_simulation("44_six_weak_links_bent_back", solver)
+    sim = stress_simulation("44_six_weak_links_bent_back", solver)
     last = _first_step_rest(sim, 3.0)
     assert np.hypot(*(last[-1] - [-200.0, -240.0])) < 1.0
     assert sim.last_tick.solver_status == "success"
 
 
-def test_under_a_ceiling_the_avoider_sends_weak_links_to_a_clear_pose_they_hold():
+def test_under_a_ceiling_the_avoider_sends_weak_links_to_a_clear_pose_they_hold(stress_simulation):
     # Six weakening links hanging under a ceiling, JT. The solver's answers ask up to 0.95 of
     # the motors, but the clear answers the avoider put in their place asked 1.02 and 1.09:
     # the arm sagged off the first target and ended the second `blocked` 62 px off it.
-    sim = _stress_simulation("63_hanging_weakening_motors", "jacobian_transpose")
+    sim = stress_simulation("63_hanging_weakening_motors", "jacobian_transpose")
     while sim.script.step_index < 2:
         sim.step()
     first, second = sim.script.outcomes[:2]
@@ -306,14 +309,16 @@ def test_under_a_ceiling_the_avoider_sends_weak_links_to_a_clear_pose_they_hold(
     assert sim.controller.solver.strain(sim.joint_angles()) <= 1.0
 
 
-def test_a_stalled_joint_tries_again_at_rest_only_short_of_a_goal_the_motors_hold():
+def test_a_stalled_joint_tries_again_at_rest_only_short_of_a_goal_the_motors_hold(
+    stress_simulation,
+):
     # The chain's own swing can carry a weak far joint off its goal at its torque limit, and
     # the joint stalls: brought in together to a goal asking 0.94 of the motors, the last of
     # 29's five weak links was pushed 34 deg back, and the arm rested 30 px short until the
     # watch held it there, blocked. At rest, short of a goal the motors hold along a way they
     # hold, the stall ends; short of one they cannot hold (a torque-bound target), it stays.
     for target, tries_again in (((-112.0, -168.0), True), ((252.0, -40.0), False)):
-        sim = _stress_simulation("29_five_weak_links", "ccd")
+        sim = stress_simulation("29_five_weak_links", "ccd")
         controller, hanging, still = sim.controller, sim.joint_angles(), np.zeros(5)
         ask = {"velocities": still, "gravity": (0.0, -1500.0), "dt": sim.dt}
         goal = controller.command(hanging, np.array(target), **ask).solution.angles
@@ -323,12 +328,14 @@ def test_a_stalled_joint_tries_again_at_rest_only_short_of_a_goal_the_motors_hol
         assert controller.servo.stalled.any() != tries_again
 
 
-def test_an_arm_lifted_from_a_stretched_rest_sets_off_for_a_pose_held_with_margin():
+def test_an_arm_lifted_from_a_stretched_rest_sets_off_for_a_pose_held_with_margin(
+    stress_simulation,
+):
     # From the rest where 29's torque-bound first target left the five weak links, no straight
     # way to any answer for (140, 84) holds. FABRIK's own answer asks 0.994 of a motor: the
     # arm pushed for it at its limits for 1.4 s before that answer, solved afresh, drifted
     # past 1.0 and one the motors hold with their margin was looked for. One was at hand.
-    sim = _stress_simulation("29_five_weak_links", "fabrik")
+    sim = stress_simulation("29_five_weak_links", "fabrik")
     controller = sim.controller
     command, answers = controller.command, []
 
@@ -348,23 +355,25 @@ def test_an_arm_lifted_from_a_stretched_rest_sets_off_for_a_pose_held_with_margi
     assert sim.script.outcomes[1].reached
 
 
-def test_a_way_round_rocks_turns_its_corners_on_the_move_where_the_chain_stays_clear():
+def test_a_way_round_rocks_turns_its_corners_on_the_move_where_the_chain_stays_clear(
+    stress_simulation,
+):
     # Five long links from beyond the right rock to low in front of the left one: a way of
     # seven pieces, most of whose next pieces are blocked from the chain until it is nearly on
     # the via pose before. Braking to rest at those corners, CCD's arm arrived 4.4 s in, too
     # late to hold the target the 1 s the step asks inside its 5 s timeout.
-    sim = _stress_simulation("66_round_rocks_low_gaps", "ccd")
+    sim = stress_simulation("66_round_rocks_low_gaps", "ccd")
     while sim.script.step_index < 5:
         sim.step()
     assert sim.script.outcomes[4].reached
 
 
-def test_without_gravity_the_base_s_swing_is_braked_in_time():
+def test_without_gravity_the_base_s_swing_is_braked_in_time(stress_simulation):
     # Ten light links without gravity, DLS's third target: from close in above the base to
     # far out below it, the base swinging 120 deg while the chain unfolds. Each joint alone,
     # the far joints' stop took the near joints' braking, the base hit its stop at 2.7 rad/s
     # and the tip flew 210 px past the target (47.5% of the 258 px approach).
-    sim = _stress_simulation("45_zero_g_ten_light_links", "dls")
+    sim = stress_simulation("45_zero_g_ten_light_links", "dls")
     while sim.script.step_index < 2:
         sim.step()
     target, tips = sim.targets["tip"].copy(), []
@@ -441,20 +450,10 @@ def _first_step_rest(sim, within: float) -> np.ndarray:
     return last
 
 
-def _stress_simulation(name: str, solver: str):
-    """A simulation of the stress level ``name`` (benchmarks/stress_levels/) with ``solver``."""
-    from ikgame.level.loader import load_level
-    from ikgame.sim import Simulation
-
-    root = Path(__file__).resolve().parents[2]
-    level = load_level(root / "benchmarks" / "stress_levels" / f"{name}.toml")
-    return Simulation(level, solver=solver, record=False)
-
-
-def test_a_kept_answer_s_strain_is_asked_again_when_gravity_changes():
+def test_a_kept_answer_s_strain_is_asked_again_when_gravity_changes(stress_simulation):
     # What holding the kept answer takes of the motors was asked under the gravity before: a
     # level that makes gravity four times stronger must not keep the lighter figure.
-    sim = _stress_simulation("40_seven_weak_links_hanging", "dls")
+    sim = stress_simulation("40_seven_weak_links_hanging", "dls")
     controller = sim.controller
     while controller._fresh is None:
         sim.step()

@@ -2,7 +2,6 @@
 
 import math
 from collections.abc import Callable
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -12,7 +11,6 @@ from ikgame.control._floats import FloatInertia
 from ikgame.control.dynamics import ChainInertia, Pose
 from ikgame.control.servo import BRAKE_FLOOR, Servo, ServoCommand
 from ikgame.kinematics import forward_kinematics
-from ikgame.level.loader import load_level
 from ikgame.level.model import Level
 from ikgame.physics.world import build_skeleton
 from ikgame.sim import Simulation
@@ -122,15 +120,12 @@ def test_a_stretched_arm_brakes_in_time():
     assert np.hypot(*(tips[-1] - target)) < 1.0
 
 
-def test_a_weak_joint_lowering_an_arm_brakes_for_the_load_it_meets_on_the_way():
+def test_a_weak_joint_lowering_an_arm_brakes_for_the_load_it_meets_on_the_way(stress_simulation):
     # Four links in gravity of 1900 px/s^2, CCD, the third target (190, 140): lowering the
     # arm out to the right, the load on the weak second joint grows from 0.14 of its limit
     # where it begins to brake to 0.86 at the goal. Its stop planned on the room it had where
     # it began, the joint came in at 23 deg/s and the tip ran on 32 px past.
-    path = Path(__file__).parents[2] / "benchmarks" / "stress_levels"
-    sim = Simulation(
-        load_level(path / "61_heavy_gravity_weak_motors.toml"), solver="ccd", record=False
-    )
+    sim = stress_simulation("61_heavy_gravity_weak_motors", "ccd")
     while sim.script.step_index < 2:
         sim.step()
     start, target = sim.joint_positions()[-1].copy(), np.array(sim.target)
@@ -145,15 +140,15 @@ def test_a_weak_joint_lowering_an_arm_brakes_for_the_load_it_meets_on_the_way():
 
 
 @pytest.mark.parametrize("solver", ["fabrik", "dls"])
-def test_joints_brought_in_together_wait_for_a_base_the_arm_s_weight_nearly_spends(solver):
+def test_joints_brought_in_together_wait_for_a_base_the_arm_s_weight_nearly_spends(
+    solver, stress_simulation
+):
     # Three links in gravity of 2700 px/s^2, from (190, 150) on the right to (-200, 150) on
     # the left, over the top: holding the arm out to the right takes 0.92 of the base's torque,
     # and the straight line in joint space to the answer lifts it through poses the motors hold.
     # Paced by their own speeds, the light far joints unfolded while the base could not yet
     # lift, the arm grew longer than the base could hold, and it lay on the floor `blocked`.
-    path = Path(__file__).parents[2] / "benchmarks" / "stress_levels"
-    level = load_level(path / "69_heavy_gravity_weak_three.toml")
-    sim = Simulation(level, solver=solver, record=False)
+    sim = stress_simulation("69_heavy_gravity_weak_three", solver)
     while sim.script.step_index < 3:
         sim.step()
     assert sim.script.outcomes[2].reached
