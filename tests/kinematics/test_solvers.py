@@ -183,9 +183,10 @@ def test_converges_on_reachable_targets_of_free_chains(name, data):
     offset = target - chain.base
     assume(abs(line[0] * offset[1] - line[1] * offset[0]) > 1e-3 * chain.reach)
     # Converging is what is asserted, not how fast: CCD crawls toward a target near full reach
-    # behind a short first link (lengths 5 and 45, a target 48.7 px out: 306 iterations).
-    sol = SOLVERS[name](chain, start, target, max_iterations=1000, tolerance=tolerance)
-    _assert_sound(chain, sol, target, 1000, tolerance)
+    # behind a short first link (lengths 5 and 45, a target 48.7 px out: 306 iterations; 5 and
+    # 81, a target 85.6 px out: 1011).
+    sol = SOLVERS[name](chain, start, target, max_iterations=5000, tolerance=tolerance)
+    _assert_sound(chain, sol, target, 5000, tolerance)
     assert sol.status is SolveStatus.SUCCESS
 
 
