@@ -64,6 +64,7 @@ the tolerance of its target. Angles are radians, distances px.
 from __future__ import annotations
 
 import math
+from collections import deque
 from collections.abc import Callable, Generator
 from dataclasses import dataclass
 from typing import Final, TypeVar
@@ -146,6 +147,10 @@ RANDOM_SEEDS: Final = 12
 
 RANDOM_POOL: Final = 400
 """Random poses drawn for a clear answer's ``RANDOM_SEEDS``, which are the nearest of them."""
+
+EARLIER_ANSWERS: Final = 4
+"""Clear answers found for earlier targets that a clear answer's search keeps as its last seeds
+(see :meth:`Clearance.seeds`)."""
 
 RANDOM_SEED: Final = 7193
 """Seed of the generators of random seeds and route samples: the same inputs give the same
@@ -338,6 +343,8 @@ class Clearance:
         self.radii = radii
         self.obstacles = obstacles
         self.margin = float(margin)
+        # The clear answers found off the stops for earlier targets, the latest first.
+        self._earlier: deque[np.ndarray] = deque(maxlen=EARLIER_ANSWERS)
         self.strain: Callable[[np.ndarray], float] | None = None
         """What holding a pose still takes of the motors, as
         :attr:`~ikgame.kinematics.recovery.RobustSolver.strain`, if known: a clear answer
@@ -639,13 +646,24 @@ class Clearance:
         bends reversed (every joint but the roots), the links curled evenly either way, then
         ``RANDOM_SEEDS`` random poses within the limits (seeded): of ``RANDOM_POOL`` drawn, the
         clear ones whose targeted ends come nearest their targets (weighted), then the others
-        by the same measure; last, a chain zig-zagged along the line to its target (see
-        :meth:`_zigzags`), which :meth:`clear_answer` polishes only where no other seed
-        arrives clear."""
+        by the same measure; then a chain zig-zagged along the line to its target (see
+        :meth:`_zigzags`); last, the clear answers off the stops found for the last
+        ``EARLIER_ANSWERS`` targets, the latest first. :meth:`clear_answer` polishes the
+        zig-zags only where no seed before them arrives clear, and the earlier answers only
+        where no seed at all does.
+
+        A target over a shelf's far side, for a chain folded under it, lies where none of the
+        target's own seeds polishes to a clear pose: the polish draws the end up into the
+        shelf's underside from below, and from random poses a long way off it stalls on the
+        wrong side of the shelf's end (`70_above_below_left_thin_shelf`, CCD, (-230, 150)
+        after (-140, 52): every seed stopped 8 to 110 px short, and the chain, taken to be
+        jammed, rested 101 px off, `blocked`). The clear answer for a target on the same side
+        earlier, (-130, 155), polishes onto it over the shelf."""
         return [
             *self._deliberate_seeds(measured, answer),
             *self._random_seeds(target),
             *self._zigzags(target),
+            *self._earlier,
         ]
 
     def _zigzags(self, target: np.ndarray | TargetSet) -> list[np.ndarray]:
@@ -785,12 +803,14 @@ class Clearance:
             lambda: self._deliberate_seeds(measured, np.asarray(answer, float)),
             lambda: self._random_seeds(target),
             lambda: self._zigzags(target),
+            lambda: list(self._earlier),
         )
         for phase, seeds in enumerate(phases):
-            if phase == 2 and (found or pressed is not None or strained):
+            if phase >= 2 and (found or pressed is not None or strained):
                 # The zig-zags only where no other seed arrives clear: under a shelf, where
                 # others arrive but none by a clear straight line, a zig-zag that did sent five
-                # links into a fold they could not leave for the next target.
+                # links into a fold they could not leave for the next target. The earlier
+                # answers only where no seed at all does.
                 break
             if phase == 1:
                 # Drawing and measuring the pool of random seeds, counted as that many poses
@@ -799,7 +819,9 @@ class Clearance:
             for start in seeds():
                 sol = yield from self._polishing(start, target, POLISH_ITERATIONS, tolerance, True)
                 if sol.status is not SolveStatus.SUCCESS:
-                    if self.is_clear(sol.angles):
+                    # An earlier target's answer that does not arrive is no start to take the
+                    # end onto the target from: the target's own seeds' nearest are.
+                    if phase < 3 and self.is_clear(sol.angles):
                         short.append(sol)
                     continue
                 if strain is not None and strain(sol.angles) > HOLDS:
@@ -808,13 +830,16 @@ class Clearance:
                 free = self.off_stops(sol.angles)
                 if (free or pressed is None) and (yield from self._checking(measured, sol.angles)):
                     if free:
+                        self._earlier.appendleft(sol.angles.copy())
                         return sol.angles, True, False
                     pressed = sol.angles
                     continue
                 found.append(sol.angles)
         roomy = [pose for pose in found if self.off_stops(pose)]
         if roomy:
-            return min(roomy, key=lambda pose: float(np.abs(pose - measured).sum())), False, False
+            nearest = min(roomy, key=lambda pose: float(np.abs(pose - measured).sum()))
+            self._earlier.appendleft(nearest.copy())
+            return nearest, False, False
         if pressed is not None:
             return pressed, True, False
         found = found or strained

@@ -274,6 +274,30 @@ def test_clear_answer_folds_a_chain_in_a_low_corridor_to_reach_near_its_base():
         assert np.hypot(*(room.points(pose)[-1] - target)) <= 1.0
 
 
+def test_clear_answer_over_a_shelf_starts_from_one_found_for_an_earlier_target_there():
+    # Eleven 33 px links folded under a thin shelf to the left; (-230, 150) lies over its far
+    # side. Every seed of the target's own (the chain's pose, the solver's answer, its bends
+    # reversed, the curls, the random poses, the zig-zags) stalls under the shelf or on the
+    # wrong side of its end; the clear answer found for (-130, 155), over it too, polishes on.
+    arm = Skeleton.chain([33.0] * 11, base_angle=math.pi / 2, limits=[(-2.653, 2.653)] * 11)
+    walls = np.array([[-550.0, -20.0, 550.0, -20.0, 0.0], [-45.0, 108.0, -275.0, 108.0, 2.0]])
+    under = np.radians([-36.0, -16.0, 13.0, 38.0, 51.0, 45.0, 26.0, 3.0, -13.0, 1.0, -3.0])
+    answer = np.radians([-15.0, 5.0, 32.0, 52.0, 46.0, 17.0, -18.0, -46.0, -46.0, 0.0, 31.0])
+    far = np.array([-230.0, 150.0])
+
+    def room() -> Clearance:
+        return Clearance(arm, np.full(11, 4.5), Obstacles.from_arrays(walls, NO_CIRCLES))
+
+    assert room().clear_answer(under, answer, far, 0.5) is None
+    earlier = room()
+    over = earlier.clear_answer(np.zeros(11), np.zeros(11), np.array([-130.0, 155.0]), 0.5)
+    assert over is not None
+    assert np.array_equal(earlier.seeds(under, answer, far)[-1], over)
+    pose = earlier.clear_answer(under, answer, far, 0.5)
+    assert pose is not None
+    assert earlier.is_clear(pose) and earlier.misses(pose, far)[0] <= 0.5
+
+
 def test_clear_answer_is_one_the_motors_hold_when_a_seed_arrives_at_one():
     # Two links and a floor far below: the target is reached with the elbow bent either way,
     # both clear. A stand-in strain the motors hold only with the elbow bent down (negative):
