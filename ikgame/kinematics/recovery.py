@@ -32,8 +32,8 @@ once per tick:
    chain): its steps are the shortest that move the end effector, so it finds the answer
    nearest the pose. Once the target has held still for
    ``STILL_CALLS`` calls (a moving target would be elsewhere by the time the chain had swung
-   round), far seeds follow, each run by the solver and then by its ``FALLBACK`` from where that
-   stopped: each of the first ``ROUND_JOINTS`` joints turned to aim at the target the other way
+   round), far seeds follow, each run by the solver and then by its ``FALLBACK`` from the seed
+   too: each of the first ``ROUND_JOINTS`` joints turned to aim at the target the other way
    round its limits; the pose mirrored across the line from the base to the target, and with its
    bends reversed; the chain stretched toward the target; the middle of every joint's range;
    ``RANDOM_SEEDS`` poses drawn within the limits by a generator seeded with ``RANDOM_SEED`` (the
@@ -985,7 +985,19 @@ class _Search:
     def run(
         self, skeleton: Skeleton, goal: np.ndarray | TargetSet, tolerance: float, budget: int
     ) -> int:
-        """Try seeds until one arrives, none are left, or ``budget`` iterations are spent."""
+        """Try seeds until one arrives, none are left, or ``budget`` iterations are spent.
+
+        A seed's solvers run one after the other, each from where the one before stopped, but
+        for a far seed of a search that takes any arrival, whose fallback starts from the seed
+        too. From where the solver stopped, the fallback only polishes the trap the solver fell
+        into: from every seed, CCD coiled sixteen light links' far joints onto their -165 deg
+        stops 28.8 px short of (-320, 30), at 96% of their reach, damped least squares could not
+        leave that coil, and the search ended ``FAILURE``, a reachable target reported out of
+        reach (`82_zero_g_sixteen_light_links`). From the seed it arrives. A search for an
+        answer the motors hold (with :attr:`accept`) keeps the chain of solvers: there the
+        fallback from the seed cost two weak hanging arms their passing runs
+        (`36_six_weak_links_hanging` with FABRIK came to rest with 2.1 px of jitter,
+        `40_seven_weak_links_hanging` with CCD missed a target)."""
         used = 0
         while used < budget and self._best_error > tolerance:
             entry = self._next()
@@ -1028,7 +1040,8 @@ class _Search:
                     self._best_error, self._best_score = sol.error, score
                 if sol.status is SolveStatus.SUCCESS:
                     return used
-                angles = sol.angles
+                if not (far and self.accept is None):
+                    angles = sol.angles
         return used
 
     def _next(self) -> tuple[_Start, tuple[Solver | TargetSolver, ...], bool] | None:
@@ -1419,7 +1432,7 @@ def _shortened(
 
 def _far_tree_seeds(skeleton: Skeleton, solve: TargetSolver, fallback: TargetSolver) -> _Seeds:
     """A tree's restarts elsewhere in the joints' ranges: the middle of every range, then the
-    random poses, each run by the solver then its fallback."""
+    random poses, each run by the solver then its fallback (see :meth:`_Search.run`)."""
     both = (solve, fallback)
     yield _middle(skeleton), both
     yield from ((pose, both) for pose in _random_poses(skeleton))
@@ -1442,8 +1455,8 @@ def _far_seeds(
     target: np.ndarray,
     drawn: int = RANDOM_SEEDS,
 ) -> _Seeds:
-    """Restarts elsewhere in the joints' ranges, each run by the solver then its fallback;
-    ``drawn`` of them random."""
+    """Restarts elsewhere in the joints' ranges, each run by the solver then its fallback (see
+    :meth:`_Search.run`); ``drawn`` of them random."""
     both = (solve, fallback)
     points = _chain_points(skeleton, stalled)
     for j in range(min(ROUND_JOINTS, skeleton.count)):

@@ -181,6 +181,25 @@ def test_a_stalled_ccd_restarts_next_to_the_chain_not_next_to_its_coil():
         assert np.abs(sol.angles - here).sum() <= 1.05 * np.abs(nearest.angles - here).sum()
 
 
+def test_a_far_seed_s_fallback_starts_from_the_seed_not_from_where_ccd_coiled():
+    # Sixteen light links and a target at 96% of their reach: from the chain's pose and from
+    # every far seed, CCD coils the last joints onto their -165 deg stops 28.8 px short, and
+    # damped least squares run on from that coil cannot leave it. Run from the seed, it arrives.
+    chain = Skeleton.chain([21.0] * 16, base_angle=PI / 2, limits=[(r(-165), r(165))] * 16)
+    here = np.radians(
+        [57, -3, -62, -50, -34, -23, -21, -21, -21, -21, -24, -24, -26, -16, 66, -136]
+    )
+    target = np.array([-320.0, 30.0])
+    raw = SOLVERS["ccd"](chain, here, target, max_iterations=1000, tolerance=TOLERANCE)
+    assert raw.status is not SolveStatus.SUCCESS and raw.error > 25.0
+    robust = RobustSolver(chain, "ccd")
+    for _ in range(100):
+        sol = robust.solve(here, target, tolerance=TOLERANCE)
+        if sol.status is not SolveStatus.PROCESSING:
+            break
+    assert sol.status is SolveStatus.SUCCESS
+
+
 @pytest.mark.parametrize("name", NAMES)
 def test_tight_symmetric_limits(name):
     rng = np.random.default_rng(10)
