@@ -652,13 +652,13 @@ class Clearance:
         zig-zags only where no seed before them arrives clear, and the earlier answers only
         where no seed at all does.
 
-        A target over a shelf's far side, for a chain folded under it, lies where none of the
-        target's own seeds polishes to a clear pose: the polish draws the end up into the
-        shelf's underside from below, and from random poses a long way off it stalls on the
-        wrong side of the shelf's end (`70_above_below_left_thin_shelf`, CCD, (-230, 150)
-        after (-140, 52): every seed stopped 8 to 110 px short, and the chain, taken to be
-        jammed, rested 101 px off, `blocked`). The clear answer for a target on the same side
-        earlier, (-130, 155), polishes onto it over the shelf."""
+        A target over a shelf's far side, for a chain folded under it, can lie where none of
+        the target's own seeds polishes to a clear pose (`70_above_below_left_thin_shelf`, CCD,
+        (-230, 150) after (-140, 52): from the chain's pose the end stalled 101 px short, from
+        the solver's answer 11.5 px short with a link in the shelf, from the other seeds 49 to
+        110 px short, and the zig-zags reached it only through the shelf; the chain, taken to
+        be jammed, rested 101 px off, `blocked`). The clear answer found for a target on the
+        same side earlier, (-130, 155), polishes onto it over the shelf."""
         return [
             *self._deliberate_seeds(measured, answer),
             *self._random_seeds(target),

@@ -277,8 +277,8 @@ def test_clear_answer_folds_a_chain_in_a_low_corridor_to_reach_near_its_base():
 def test_clear_answer_over_a_shelf_starts_from_one_found_for_an_earlier_target_there():
     # Eleven 33 px links folded under a thin shelf to the left; (-230, 150) lies over its far
     # side. Every seed of the target's own (the chain's pose, the solver's answer, its bends
-    # reversed, the curls, the random poses, the zig-zags) stalls under the shelf or on the
-    # wrong side of its end; the clear answer found for (-130, 155), over it too, polishes on.
+    # reversed, the curls, the random poses, the zig-zags) stalls short of it or ends in the
+    # shelf; the clear answer found for (-130, 155), over the shelf too, polishes onto it.
     arm = Skeleton.chain([33.0] * 11, base_angle=math.pi / 2, limits=[(-2.653, 2.653)] * 11)
     walls = np.array([[-550.0, -20.0, 550.0, -20.0, 0.0], [-45.0, 108.0, -275.0, 108.0, 2.0]])
     under = np.radians([-36.0, -16.0, 13.0, 38.0, 51.0, 45.0, 26.0, 3.0, -13.0, 1.0, -3.0])
