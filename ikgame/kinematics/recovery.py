@@ -985,19 +985,7 @@ class _Search:
     def run(
         self, skeleton: Skeleton, goal: np.ndarray | TargetSet, tolerance: float, budget: int
     ) -> int:
-        """Try seeds until one arrives, none are left, or ``budget`` iterations are spent.
-
-        A seed's solvers run one after the other, each from where the one before stopped, but
-        for a far seed of a search that takes any arrival, whose fallback starts from the seed
-        too. From where the solver stopped, the fallback only polishes the trap the solver fell
-        into: from every seed, CCD coiled sixteen light links' far joints onto their -165 deg
-        stops 28.8 px short of (-320, 30), at 96% of their reach, damped least squares could not
-        leave that coil, and the search ended ``FAILURE``, a reachable target reported out of
-        reach (`82_zero_g_sixteen_light_links`). From the seed it arrives. A search for an
-        answer the motors hold (with :attr:`accept`) keeps the chain of solvers: there the
-        fallback from the seed cost two weak hanging arms their passing runs
-        (`36_six_weak_links_hanging` with FABRIK came to rest with 2.1 px of jitter,
-        `40_seven_weak_links_hanging` with CCD missed a target)."""
+        """Try seeds until one arrives, none are left, or ``budget`` iterations are spent."""
         used = 0
         while used < budget and self._best_error > tolerance:
             entry = self._next()
@@ -1040,8 +1028,7 @@ class _Search:
                     self._best_error, self._best_score = sol.error, score
                 if sol.status is SolveStatus.SUCCESS:
                     return used
-                if not (far and self.accept is None):
-                    angles = sol.angles
+                angles = sol.angles
         return used
 
     def _next(self) -> tuple[_Start, tuple[Solver | TargetSolver, ...], bool] | None:
@@ -1134,7 +1121,7 @@ def _far_held_seeds(
     then the ``strained`` answer slid toward one they can hold (``_relieved``). The slide comes
     last: it finds a pose near the answer, but the way there may pass poses the motors cannot
     hold (a weak base lifting the stretched arm), where a far pose, folded, can be reached."""
-    yield from _far_seeds(skeleton, solve, fallback, strained, target, HOLD_SEEDS)
+    yield from _far_seeds(skeleton, solve, fallback, strained, target, HOLD_SEEDS, chained=True)
     yield _relieved(skeleton, strained, strain, slope), (solve_dls,)
 
 
@@ -1432,10 +1419,35 @@ def _shortened(
 
 def _far_tree_seeds(skeleton: Skeleton, solve: TargetSolver, fallback: TargetSolver) -> _Seeds:
     """A tree's restarts elsewhere in the joints' ranges: the middle of every range, then the
-    random poses, each run by the solver then its fallback (see :meth:`_Search.run`)."""
-    both = (solve, fallback)
-    yield _middle(skeleton), both
-    yield from ((pose, both) for pose in _random_poses(skeleton))
+    random poses, each run by the solver and by its fallback (see :func:`_both`)."""
+    yield from _both(_middle(skeleton), solve, fallback)
+    for pose in _random_poses(skeleton):
+        yield from _both(pose, solve, fallback)
+
+
+def _both(
+    pose: np.ndarray,
+    solve: Solver | TargetSolver,
+    fallback: Solver | TargetSolver,
+    chained: bool = False,
+) -> _Seeds:
+    """A far restart from ``pose``: ``solve`` from it, then ``fallback`` from it too, or with
+    ``chained``, from where ``solve`` stopped.
+
+    From where the solver stopped, the fallback only polishes the trap the solver fell into:
+    from every seed, CCD coiled sixteen light links' far joints onto their -165 deg stops
+    28.8 px short of (-320, 30), at 96% of their reach, damped least squares run on from there
+    could not leave the coil, and the search ended ``FAILURE``, a reachable target reported out
+    of reach (`82_zero_g_sixteen_light_links`). From the seed it arrives. The search for an
+    answer the motors hold chains them (see :func:`_far_held_seeds`): there the fallback from
+    the seed cost two weak hanging arms their passing runs (`36_six_weak_links_hanging` with
+    FABRIK came to rest with 2.1 px of jitter, `40_seven_weak_links_hanging` with CCD missed a
+    target)."""
+    if chained:
+        yield pose, (solve, fallback)
+    else:
+        yield pose, (solve,)
+        yield pose, (fallback,)
 
 
 def _random_poses(skeleton: Skeleton, count: int = RANDOM_SEEDS) -> Iterator[np.ndarray]:
@@ -1454,26 +1466,27 @@ def _far_seeds(
     stalled: np.ndarray,
     target: np.ndarray,
     drawn: int = RANDOM_SEEDS,
+    chained: bool = False,
 ) -> _Seeds:
-    """Restarts elsewhere in the joints' ranges, each run by the solver then its fallback (see
-    :meth:`_Search.run`); ``drawn`` of them random."""
-    both = (solve, fallback)
+    """Restarts elsewhere in the joints' ranges, each run by the solver and by its fallback
+    (see :func:`_both`, which ``chained`` goes to); ``drawn`` of them random."""
     points = _chain_points(skeleton, stalled)
     for j in range(min(ROUND_JOINTS, skeleton.count)):
         round_the_limit = _the_other_way_round(skeleton, stalled, points, j, target)
         if round_the_limit is not None:
-            yield round_the_limit, both
+            yield from _both(round_the_limit, solve, fallback, chained)
     heading = math.atan2(*(target - skeleton.base)[::-1]) - skeleton.base_angle
     mirrored = -stalled
     mirrored[0] = 2.0 * heading - stalled[0]
-    yield _aimed(skeleton, skeleton.clamp(mirrored), target), both
+    yield from _both(_aimed(skeleton, skeleton.clamp(mirrored), target), solve, fallback, chained)
     bends_reversed = -stalled
     bends_reversed[0] = stalled[0]
-    yield _aimed(skeleton, skeleton.clamp(bends_reversed), target), both
-    yield _stretched_toward(skeleton, target), both
-    yield _aimed(skeleton, _middle(skeleton), target), both
+    bends = _aimed(skeleton, skeleton.clamp(bends_reversed), target)
+    yield from _both(bends, solve, fallback, chained)
+    yield from _both(_stretched_toward(skeleton, target), solve, fallback, chained)
+    yield from _both(_aimed(skeleton, _middle(skeleton), target), solve, fallback, chained)
     for pose in _random_poses(skeleton, drawn):
-        yield _aimed(skeleton, pose, target), both
+        yield from _both(_aimed(skeleton, pose, target), solve, fallback, chained)
 
 
 def _the_other_way_round(
