@@ -659,12 +659,27 @@ class Clearance:
         110 px short, and the zig-zags reached it only through the shelf; the chain, taken to
         be jammed, rested 101 px off, `blocked`). The clear answer found for a target on the
         same side earlier, (-130, 155), polishes onto it over the shelf."""
-        return [
-            *self._deliberate_seeds(measured, answer),
-            *self._random_seeds(target),
-            *self._zigzags(target),
-            *self._earlier,
-        ]
+        return [seed for phase in self._phases(measured, answer, target) for seed in phase.seeds()]
+
+    def _phases(
+        self, measured: np.ndarray, answer: np.ndarray, target: np.ndarray | TargetSet
+    ) -> tuple[_SeedPhase, ...]:
+        """The groups of :meth:`seeds`, in the order :meth:`clear_answer` polishes them."""
+        answer = np.asarray(answer, float)
+        # Drawing and measuring the pool of random seeds, counted as that many poses checked:
+        # paid only by a search the deliberate seeds did not settle.
+        drawing = POSE_UNITS * RANDOM_POOL * self.skeleton.count * len(self.obstacles)
+        return (
+            _SeedPhase(lambda: self._deliberate_seeds(measured, answer)),
+            _SeedPhase(lambda: self._random_seeds(target), units=drawing),
+            # The zig-zags only where no other seed arrives clear: under a shelf, where others
+            # arrive but none by a clear straight line, a zig-zag that did sent five links into
+            # a fold they could not leave for the next target.
+            _SeedPhase(lambda: self._zigzags(target), last_resort=True),
+            # An earlier target's answer that does not arrive is no start to take the end onto
+            # the target from: the target's own seeds' nearest are.
+            _SeedPhase(lambda: list(self._earlier), last_resort=True, own=False),
+        )
 
     def _zigzags(self, target: np.ndarray | TargetSet) -> list[np.ndarray]:
         """A chain folded in a zig-zag, each link turned the same angle off the line from the
@@ -799,29 +814,15 @@ class Clearance:
         # Answers the motors cannot hold: taken only if none they hold is found.
         strained: list[np.ndarray] = []
         strain = self.strain
-        phases = (
-            lambda: self._deliberate_seeds(measured, np.asarray(answer, float)),
-            lambda: self._random_seeds(target),
-            lambda: self._zigzags(target),
-            lambda: list(self._earlier),
-        )
-        for phase, seeds in enumerate(phases):
-            if phase >= 2 and (found or pressed is not None or strained):
-                # The zig-zags only where no other seed arrives clear: under a shelf, where
-                # others arrive but none by a clear straight line, a zig-zag that did sent five
-                # links into a fold they could not leave for the next target. The earlier
-                # answers only where no seed at all does.
+        for phase in self._phases(measured, answer, target):
+            if phase.last_resort and (found or pressed is not None or strained):
                 break
-            if phase == 1:
-                # Drawing and measuring the pool of random seeds, counted as that many poses
-                # checked: paid only by a search the deliberate seeds did not settle.
-                yield POSE_UNITS * RANDOM_POOL * self.skeleton.count * len(self.obstacles)
-            for start in seeds():
+            if phase.units:
+                yield phase.units
+            for start in phase.seeds():
                 sol = yield from self._polishing(start, target, POLISH_ITERATIONS, tolerance, True)
                 if sol.status is not SolveStatus.SUCCESS:
-                    # An earlier target's answer that does not arrive is no start to take the
-                    # end onto the target from: the target's own seeds' nearest are.
-                    if phase < 3 and self.is_clear(sol.angles):
+                    if phase.own and self.is_clear(sol.angles):
                         short.append(sol)
                     continue
                 if strain is not None and strain(sol.angles) > HOLDS:
@@ -1505,6 +1506,19 @@ class Clearance:
             if not np.all(chunk >= bar):
                 return None
         return ahead
+
+
+@dataclass(frozen=True)
+class _SeedPhase:
+    """A group of a clear answer's seeds (see :meth:`Clearance.seeds`): ``seeds()`` draws them,
+    at the cost of ``units`` of work; a ``last_resort`` is polished only where no seed before it
+    arrived clear; a clear pose an ``own`` seed stalls in (the target's own, not an earlier
+    target's answer) may be the start the end is taken onto the target from."""
+
+    seeds: Callable[[], list[np.ndarray]]
+    units: float = 0.0
+    last_resort: bool = False
+    own: bool = True
 
 
 class _Tree:
