@@ -71,6 +71,7 @@ from typing import Final, TypeVar
 
 import numpy as np
 
+from ikgame.kinematics._compiled_gaps import compiled_gaps
 from ikgame.kinematics.recovery import HOLDS, SETTLED
 from ikgame.kinematics.skeleton import Skeleton, tree_points
 from ikgame.kinematics.solver import Solution, SolveStatus
@@ -363,6 +364,7 @@ class Clearance:
         self._round_reach = self._reach[:, round_]
         self._long_ends = self._ends[:, :, ~round_]
         self._long_reach = self._reach[:, ~round_]
+        self._pairs_per_link = len(obstacles)
         # How far a point of link i can be from joint j when j moves it (0 when it does not):
         # the step bound of path checks link by link; over every link, the longest way down
         # from joint j through its subtree.
@@ -457,6 +459,10 @@ class Clearance:
         if links is not None:
             starts, ends = starts[..., links, :], ends[..., links, :]
             round_reach, long_reach = round_reach[links], long_reach[links]
+        compiled = compiled_gaps(starts[..., 0].size * self._pairs_per_link)
+        if compiled is not None:
+            q0, q1 = self._long_ends[0, 0], self._long_ends[1, 0]
+            return compiled(starts, ends, self._centers, round_reach, q0, q1, long_reach)
         shared = self.skeleton.is_chain and links is None
         least: list[np.ndarray] = []
         if len(self._centers):
