@@ -50,10 +50,10 @@ width). A chain aims its end effector at a point; a tree aims a
 :class:`Avoider` does this tick by tick for a controller: it takes the solver's answer and
 returns the pose to command, keeping the clear answer and the route for the target until it
 moves, so they are searched once, and spreading each search over ticks by a budget of counted
-work (``SEARCH_BUDGET``) so that no tick carries a whole one; a chain at rest or in the open
-costs two products of the links' levers a tick. A route is followed on its lines (a straight
-way to the goal too), each pose commanded at most ``LEAD`` ahead of the joint that has come
-least far. A target no clear pose reaches (under the floor) sends the chain to the clear pose
+work (``SEARCH_RATE`` a simulated second) so that no tick carries a whole one; a chain at rest
+or in the open costs two products of the links' levers a tick. A route is followed on its lines
+(a straight way to the goal too), each pose commanded at most ``LEAD`` ahead of the joint that
+has come least far. A target no clear pose reaches (under the floor) sends the chain to the clear pose
 nearest it, where it rests held off the obstacle instead of pressing into it.
 While the base moves it plans nothing (a plan would be stale by the next tick): it only holds
 off an obstacle the links the solver's answers bring nearer it, polishing the pose it commanded
@@ -98,6 +98,7 @@ __all__ = [
     "POLISH_REACH",
     "JAMMED_WORK",
     "SEARCH_BUDGET",
+    "SEARCH_RATE",
     "Avoider",
     "Clearance",
     "Obstacles",
@@ -210,10 +211,20 @@ routes to such poses on ``34_chain40_pressed_to_floor`` took 4,000 to 71,000 uni
 were found, and from CCD's chain resting at the first target's, none to the second's in the
 500,000 of a whole step."""
 
-SEARCH_BUDGET: Final = 600
-"""Units of work an :class:`Avoider`'s search does in one call at most, before its last step (a
-unit is about 4.5 us of CPU time on the 2-core development machine: about 3 ms a call, so that
-the four ticks of a 60 fps frame leave room for the rest)."""
+SEARCH_RATE: Final = 288_000
+"""Units of work an :class:`Avoider`'s search does in a simulated second at most: a simulation
+gives it ``SEARCH_RATE / tick_rate`` units a call, so that a search takes the same simulated
+time at any tick rate (and a game loop's frame the same CPU time). A chain holds still while
+its search runs: at half this rate (600 units a tick at 240 ticks/s) the searches on the
+quality suite's obstacle levels held their chains 0.3 to 2.6 s of their 4 to 6 s timeouts,
+and eleven of its runs arrived too late. A unit is about 4.5 us of CPU time on the 2-core
+development machine with numpy's gap measure, 2.2 to 2.4 us with the compiled one
+(:mod:`~ikgame.kinematics._compiled_gaps`): a tick's 1,200 at 240 ticks/s, about 5.4 and 2.8
+ms."""
+
+SEARCH_BUDGET: Final = SEARCH_RATE / 240
+"""Units of work an :class:`Avoider`'s search does in one call at most, before its last step,
+by default: ``SEARCH_RATE``'s share of a tick at the levels' default 240 ticks/s."""
 
 ITERATION_UNITS: Final = 40
 """Units of search work one polish iteration counts for."""

@@ -63,7 +63,7 @@ def test_with_an_avoider_the_chain_goes_under_the_shelf_without_touching_it(solv
     room = ctl.avoider.clearance
     pose, dt = np.array([0.5, 0.3, 0.2]), 1.0 / 240.0
     for target in ([290.0, 45.0], [-150.0, 230.0]):
-        # The search for the way round is spread over up to about 25 of these ticks, and the
+        # The search for the way round is spread over up to about 12 of these ticks, and the
         # chain waits meanwhile.
         for _ in range(600):
             pose = pose + ctl.command(pose, np.array(target)).rates * dt
