@@ -1666,6 +1666,8 @@ class Avoider:
         self._goal: np.ndarray | None = None
         self._way: list[np.ndarray] = []
         self._origin: np.ndarray | None = None
+        # Whether the plan was taken up on the last call (see _steer).
+        self._set_out = False
         self._given_up: tuple[float, ...] | None = None
         self._tolerance: float | np.ndarray = 0.0
         self._jammed = False
@@ -1755,6 +1757,15 @@ class Avoider:
             self._take_ahead(key, measured)
         search = self._search
         if search is None and self._goal is not None and key == self._target:
+            set_out, self._set_out = self._set_out, False
+            if set_out and not self._needs(measured, solution)[0]:
+                # The solver's answer arrived, clear and clear to turn to, on the call after
+                # the search ended: its plan is dropped as the search would have been one
+                # call slower. (Taken up, the ways round held weak arms under heavy gravity
+                # to the pace of their slowest joint: 69's reached its second target only as
+                # the step timed out, and 80's stalled on its way, blocked 286 px off.)
+                self._drop()
+                return solution
             if not self._arrived(measured, target):
                 if not (self.replan or self._pinned(measured)) or self._clear_way(
                     measured, self._way[0]
@@ -2063,6 +2074,7 @@ class Avoider:
         # too: sent to a far goal in one go, the joints with far to turn lag the others, and the
         # ends can come onto the target with a joint still far off, and swing on past it.
         self._origin = measured.copy()
+        self._set_out = True
         moved = not np.array_equal(measured, search.start)
         if moved and not self._clear_way(measured, self._way[0]):
             # The chain went on (along an earlier plan, or drifting while it held) and the
@@ -2092,6 +2104,7 @@ class Avoider:
         self._target, self._goal, self._way, self._search = None, None, [], None
         self._jammed = False
         self._origin = None
+        self._set_out = False
 
     def _arrived(self, measured: np.ndarray, target: np.ndarray | TargetSet) -> bool:
         """Whether the solver may answer again: the chain has rested on the clear goal (within

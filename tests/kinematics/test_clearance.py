@@ -1250,6 +1250,24 @@ def test_a_way_planned_ahead_is_dropped_once_the_solvers_answer_needs_none():
     assert waits > 10 and len(_settle(guide, rest, on_its_way, target)) == waits
 
 
+def test_a_plan_taken_up_the_call_before_the_solvers_answer_arrives_clear_gives_way_to_it():
+    beside = Solution(np.array([0.55, 0.35, 0.25]), SolveStatus.SUCCESS, 10, 0.0)
+    follows = []
+    for calls_after in (0, 1):
+        guide, rest, through, target = _holding_up(ITERATION_UNITS)
+        on_its_way = Solution(through.angles, SolveStatus.PROCESSING, 10, 40.0)
+        _settle(guide, rest, on_its_way, target)  # the last call takes the plan up
+        for _ in range(calls_after):
+            guide.steer(rest, on_its_way, target, 0.5)
+        command = guide.steer(rest, beside, target, 0.5)  # arrived: clear, clear to turn to
+        follows.append(not guide.idle)
+        if calls_after == 0:
+            # As if the search had ended one call later: dropped, as the search would be.
+            assert guide.idle and np.array_equal(command.angles, beside.angles)
+    # A call later the chain is on its way, and keeps to it.
+    assert follows == [False, True]
+
+
 def test_planning_ahead_takes_only_calls_that_did_no_search_work():
     guide, rest, through, target = _holding_up(ITERATION_UNITS)
     searching = guide.steer(rest, through, target, 0.5)
