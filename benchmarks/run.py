@@ -13,6 +13,8 @@ target. Timings are medians of repeats. Sections:
   ``python -m ikgame run LEVEL --no-frames`` process, and the longest single tick of a run (a
   hitch a game loop would show); start-up of ``ikgame --version``;
 - solvers: time per IK solve against ikpy on the same planar chains and tolerance;
+- search: the obstacle planner's gap measure in numpy against compiled (the ``fast`` extra), a
+  call and whole stress-level runs whose searches are long;
 - export: frames per second at three sizes against ``pymunk.pygame_util`` + ``pygame.image.save``
   and against minimal Pillow drawing (lines + PNG save);
 - memory: peak resident memory of a whole long export, worker processes included.
@@ -24,6 +26,7 @@ line saying so when they are missing.
 from __future__ import annotations
 
 import argparse
+import functools
 import math
 import os
 import statistics
@@ -39,7 +42,8 @@ import _checkout  # noqa: F401  (first: this checkout's ikgame)
 import numpy as np
 from chains import chain_level
 
-from ikgame.kinematics import SOLVERS, Skeleton, _compiled, forward_kinematics
+from ikgame.kinematics import SOLVERS, Skeleton, _compiled, _compiled_gaps, forward_kinematics
+from ikgame.kinematics.clearance import Clearance, Obstacles
 from ikgame.level.library import LEVELS_DIR, shipped_levels
 from ikgame.level.loader import load_level
 from ikgame.level.model import Level
@@ -50,6 +54,18 @@ from ikgame.sim import Simulation
 
 ROOT = Path(__file__).resolve().parents[1]
 BARE_ITERATIONS = 20  # pymunk iterations of the bare reference step
+STRESS_DIR = ROOT / "benchmarks" / "stress_levels"
+SEARCH_LEVELS = ["55_pocket_behind_wall_both_folds", "73_seven_links_rocks_low_gaps"]
+# A floor, a shelf with a lip, a wall and two rocks: the search benchmark's room (px).
+SEARCH_SEGMENTS = np.array(
+    [
+        [-600.0, -20.0, 600.0, -20.0, 4.0],
+        [-370.0, 100.0, -90.0, 100.0, 5.0],
+        [-370.0, 100.0, -370.0, 50.0, 5.0],
+        [-190.0, -20.0, -190.0, 38.0, 5.0],
+    ]
+)
+SEARCH_CIRCLES = np.array([[-150.0, 200.0, 30.0], [100.0, 150.0, 20.0]])
 EXPORT_LEVEL = "13_conductor"  # the showpiece: obstacles, props, goals, trail, dashed path
 MEMORY_LEVEL = "06_circle"
 
@@ -169,6 +185,59 @@ def bench_tick(sizes: list[int], repeats: int) -> None:
                 f"   growth exponent ({target}): full tick {full_slope:.2f}, bare step "
                 f"{bare_slope:.2f}   target: about 1 (linear in links)"
             )
+
+
+# -- the obstacle search -----------------------------------------------------------------------------
+
+
+def _search_run(path: Path, solver: str) -> float:
+    """CPU s of a whole run of the stress level at ``path`` with ``solver``."""
+    sim = Simulation(load_level(path), solver=solver, record=False)
+    start = time.process_time()
+    while not sim.done:
+        sim.step()
+    return time.process_time() - start
+
+
+def bench_search(levels: list[str], repeats: int) -> None:
+    _header("search: the obstacle planner's gap measure, numpy against compiled (the fast extra)")
+    try:
+        import numba
+    except ImportError:
+        print("   numba is not installed: no compiled gaps to compare (pip install -e '.[fast]')")
+        return
+    kernel = _compiled_gaps._measure(_compiled_gaps._compile(numba))
+    # Built now, so that no run pays for compiling it (a run builds it once it has measured
+    # COMPILE_AFTER pairs, on a thread of its own).
+    _compiled_gaps._build.gaps = kernel
+    room = Clearance(
+        Skeleton.chain([60.0] * 7, base_angle=math.pi / 2),
+        np.full(7, 6.0),
+        Obstacles.from_arrays(SEARCH_SEGMENTS, SEARCH_CIRCLES),
+    )
+    rng = np.random.default_rng(0)
+    print("   one gap measure of a 7-link chain among 6 obstacles, us a call, median of repeats")
+    print(f"   {'poses':>6}{'numpy':>10}{'compiled':>10}{'ratio':>8}")
+    for poses in (1, 20, 100):
+        pts = room.points(rng.uniform(-2.0, 2.0, (poses, 7)))
+        measure = functools.partial(room._gaps, pts)
+        calls = 4000 // poses
+        numpy_times, compiled_times = [], []
+        for _ in range(5):
+            numpy_times.append(_in_python(measure, calls))
+            compiled_times.append(_per_tick(measure, calls))
+        slow, fast = statistics.median(numpy_times), statistics.median(compiled_times)
+        print(f"   {poses:>6}{slow * 1e6:>8.0f}us{fast * 1e6:>8.0f}us{slow / fast:>7.1f}x")
+    print("   whole runs of stress levels whose searches are long, CPU s, median of repeats")
+    print(f"   {'level':<40}{'solver':<8}{'numpy':>8}{'compiled':>10}{'ratio':>8}")
+    for name in levels:
+        path = STRESS_DIR / f"{name}.toml"
+        numpy_times, compiled_times = [], []
+        for _ in range(repeats):
+            numpy_times.append(_in_python(lambda: _search_run(path, "fabrik"), 1))  # noqa: B023
+            compiled_times.append(_search_run(path, "fabrik"))
+        slow, fast = statistics.median(numpy_times), statistics.median(compiled_times)
+        print(f"   {name:<40}{'fabrik':<8}{slow:>7.2f}s{fast:>9.2f}s{slow / fast:>7.1f}x")
 
 
 # -- levels and start-up ---------------------------------------------------------------------------
@@ -523,11 +592,13 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument(
         "--only",
         metavar="LIST",
-        help="comma-separated sections: tick, levels, startup, solvers, export, memory",
+        help="comma-separated sections: tick, levels, startup, solvers, search, export, memory",
     )
     args = parser.parse_args(argv)
     sections = set(
-        (args.only or "tick,levels,startup,solvers,export,memory").replace(" ", "").split(",")
+        (args.only or "tick,levels,startup,solvers,search,export,memory")
+        .replace(" ", "")
+        .split(",")
     )
     quick = args.quick
     started = time.perf_counter()
@@ -545,6 +616,8 @@ def main(argv: list[str] | None = None) -> int:
         bench_startup(3 if quick else 7)
     if "solvers" in sections:
         bench_solvers([10] if quick else [10, 30, 100], 10 if quick else 20, 3)
+    if "search" in sections:
+        bench_search(SEARCH_LEVELS[:1] if quick else SEARCH_LEVELS, 1 if quick else 2)
     if "export" in sections:
         sizes = [(960, 540)] if quick else [(480, 270), (960, 540), (1920, 1080)]
         bench_export(30 if quick else 60, 1 if quick else 2, sizes)

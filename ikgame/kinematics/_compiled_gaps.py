@@ -148,8 +148,10 @@ def compiled_gaps(pairs: int) -> Gaps | None:
     """The compiled gap measure, or None while it is not ready (or numba is missing, cannot
     compile, or is turned off). ``pairs`` is how many link and obstacle pairs the caller is
     about to measure, counted toward ``COMPILE_AFTER``."""
+    if turned_off():
+        return None
     gaps = _build.gaps
-    if gaps is None and not turned_off():
+    if gaps is None:
         _build.count(pairs)
     return gaps
 
