@@ -79,16 +79,21 @@ _THREE_LINKS_IN_GRAVITY = {
 }
 
 
+# A floor and a shelf 130 px up to the right, and a target under the shelf.
+_FLOOR_AND_SHELF = [
+    {"kind": "segment", "a": [-400.0, -20.0], "b": [500.0, -20.0]},
+    {"kind": "segment", "a": [130.0, 130.0], "b": [420.0, 130.0], "radius": 6.0},
+]
+_UNDER_THE_SHELF = {"reach": [290.0, 45.0], "hold": 0.5, "timeout": 4.0}
+
+
 def test_the_chain_reaches_under_a_shelf_without_pressing_against_it(make_level):
     # The straight answers for a target under a shelf press the arm against it (the solvers
     # know no obstacles); the controller commands a clear pose and a clear way to it instead.
     level = make_level(
         **_THREE_LINKS_IN_GRAVITY,
-        obstacles=[
-            {"kind": "segment", "a": [-400.0, -20.0], "b": [500.0, -20.0]},
-            {"kind": "segment", "a": [130.0, 130.0], "b": [420.0, 130.0], "radius": 6.0},
-        ],
-        script=[{"reach": [290.0, 45.0], "hold": 0.5, "timeout": 4.0}],
+        obstacles=_FLOOR_AND_SHELF,
+        script=[_UNDER_THE_SHELF],
     )
     sim = Simulation(level, solver="dls", record=False)
     room = sim.controller.avoider.clearance
@@ -110,11 +115,8 @@ def test_a_search_for_a_way_takes_the_same_simulated_time_at_any_tick_rate(make_
     for rate in (120, 480):
         level = make_level(
             **_THREE_LINKS_IN_GRAVITY | {"world": {"gravity": [0.0, -900.0], "tick_rate": rate}},
-            obstacles=[
-                {"kind": "segment", "a": [-400.0, -20.0], "b": [500.0, -20.0]},
-                {"kind": "segment", "a": [130.0, 130.0], "b": [420.0, 130.0], "radius": 6.0},
-            ],
-            script=[{"reach": [290.0, 45.0], "hold": 0.5, "timeout": 4.0}],
+            obstacles=_FLOOR_AND_SHELF,
+            script=[_UNDER_THE_SHELF],
         )
         sim = Simulation(level, solver="dls", record=False)
         ticks = 0
@@ -134,13 +136,10 @@ def test_the_way_to_the_next_scripted_target_is_planned_while_the_chain_holds_on
 ):
     level = make_level(
         **_THREE_LINKS_IN_GRAVITY,
-        obstacles=[
-            {"kind": "segment", "a": [-400.0, -20.0], "b": [500.0, -20.0]},
-            {"kind": "segment", "a": [130.0, 130.0], "b": [420.0, 130.0], "radius": 6.0},
-        ],
+        obstacles=_FLOOR_AND_SHELF,
         script=[
             {"reach": [60.0, 330.0], "hold": 0.5, "timeout": 4.0},
-            {"reach": [290.0, 45.0], "hold": 0.5, "timeout": 4.0},
+            _UNDER_THE_SHELF,
         ],
     )
 

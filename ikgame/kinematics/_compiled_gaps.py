@@ -169,21 +169,13 @@ def _compile(numba: ModuleType) -> Callable[..., None]:
 def _measure(kernel: Callable[..., None]) -> Gaps:
     """:data:`Gaps` by ``kernel``, for poses of any leading shape."""
 
-    def gaps(
-        starts: np.ndarray,
-        ends: np.ndarray,
-        centers: np.ndarray,
-        round_reach: np.ndarray,
-        a: np.ndarray,
-        b: np.ndarray,
-        long_reach: np.ndarray,
-    ) -> np.ndarray:
+    def gaps(starts: np.ndarray, ends: np.ndarray, *obstacles: np.ndarray) -> np.ndarray:
         shape = starts.shape[:-1]
         flat = (-1, shape[-1], 2)
         starts = np.ascontiguousarray(starts).reshape(flat)
         ends = np.ascontiguousarray(ends).reshape(flat)
         out = np.empty(starts.shape[:2])
-        kernel(starts, ends, centers, round_reach, a, b, long_reach, out)
+        kernel(starts, ends, *obstacles, out)
         return out.reshape(shape)
 
     return gaps
