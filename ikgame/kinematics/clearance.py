@@ -53,8 +53,8 @@ moves, so they are searched once, and spreading each search over ticks by a budg
 work (``SEARCH_RATE`` a simulated second) so that no tick carries a whole one; a chain at rest
 or in the open costs two products of the links' levers a tick. A route is followed on its lines
 (a straight way to the goal too), each pose commanded at most ``LEAD`` ahead of the joint that
-has come least far. A target no clear pose reaches (under the floor) sends the chain to the clear pose
-nearest it, where it rests held off the obstacle instead of pressing into it.
+has come least far. A target no clear pose reaches (under the floor) sends the chain to the
+clear pose nearest it, where it rests held off the obstacle instead of pressing into it.
 While the base moves it plans nothing (a plan would be stale by the next tick): it only holds
 off an obstacle the links the solver's answers bring nearer it, polishing the pose it commanded
 onto the target for where the base is now. An answer arrives when every targeted end is within
@@ -464,7 +464,9 @@ class Clearance:
 
     def _gaps(self, pts: np.ndarray, links: np.ndarray | None = None) -> np.ndarray:
         """Each link's smallest signed gap (..., n) to any obstacle, px; with ``links``
-        (indices), those links' only (..., len(links)), the same numbers."""
+        (indices), those links' only (..., len(links)), the same numbers. Measured by the
+        compiled loop once a process has built it (:mod:`~ikgame.kinematics._compiled_gaps`),
+        the same numbers again."""
         starts, ends = self._links(pts)
         round_reach, long_reach = self._round_reach, self._long_reach
         if links is not None:
@@ -1666,7 +1668,8 @@ class Avoider:
         self._goal: np.ndarray | None = None
         self._way: list[np.ndarray] = []
         self._origin: np.ndarray | None = None
-        # Whether the plan was taken up on the last call (see _steer).
+        # Whether the plan was taken up on the last call, from a search the solver's answer
+        # could have dropped (see _steer).
         self._set_out = False
         self._given_up: tuple[float, ...] | None = None
         self._tolerance: float | np.ndarray = 0.0
@@ -2074,7 +2077,8 @@ class Avoider:
         # too: sent to a far goal in one go, the joints with far to turn lag the others, and the
         # ends can come onto the target with a joint still far off, and swing on past it.
         self._origin = measured.copy()
-        self._set_out = True
+        # A search that routes the plan again drops for no answer of the solver's (see _steer).
+        self._set_out = not search.reroute
         moved = not np.array_equal(measured, search.start)
         if moved and not self._clear_way(measured, self._way[0]):
             # The chain went on (along an earlier plan, or drifting while it held) and the
