@@ -27,7 +27,7 @@ def numba_without_compiler(monkeypatch: pytest.MonkeyPatch) -> str:
     loops must fall back to Python with a warning. Returns the warning's text to match."""
     numba = pytest.importorskip("numba")
 
-    def broken(**options: object) -> object:
+    def broken(*signature: object, **options: object) -> object:
         raise RuntimeError("no compiler here")
 
     monkeypatch.setattr(numba, "njit", broken)

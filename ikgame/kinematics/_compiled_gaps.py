@@ -157,13 +157,13 @@ def compiled_gaps(pairs: int) -> Gaps | None:
 
 
 def _compile(numba: ModuleType) -> Callable[..., None]:
-    # Cached on disk: the loop calls nothing of ikgame's, so a change to this module is the
-    # only change that makes numba compile it again.
-    kernel = numba.njit(nogil=True, cache=True)(_gap_loop)
-    # Compiled (or loaded) now, for the arrays every call passes.
-    one = np.zeros((1, 1, 2))
-    kernel(one, one, np.zeros((1, 2)), np.zeros((1, 1)), one[0], one[0], np.zeros((1, 1)), one[0])
-    return kernel
+    # Compiled now, for C-ordered arrays only (the caller passes no others: an array of
+    # another layout would have numba compile again, in the middle of a tick). Cached on disk:
+    # the loop calls nothing of ikgame's, so a change to this module is the only change that
+    # makes numba compile it again.
+    grid, points = numba.float64[:, :, ::1], numba.float64[:, ::1]
+    signature = numba.void(grid, grid, points, points, points, points, points, points)
+    return numba.njit(signature, nogil=True, cache=True)(_gap_loop)
 
 
 def _measure(kernel: Callable[..., None]) -> Gaps:
@@ -175,7 +175,7 @@ def _measure(kernel: Callable[..., None]) -> Gaps:
         starts = np.ascontiguousarray(starts).reshape(flat)
         ends = np.ascontiguousarray(ends).reshape(flat)
         out = np.empty(starts.shape[:2])
-        kernel(starts, ends, *obstacles, out)
+        kernel(starts, ends, *map(np.ascontiguousarray, obstacles), out)
         return out.reshape(shape)
 
     return gaps

@@ -372,9 +372,10 @@ class Clearance:
         # ones (segments), which need their ends and crossings measured too.
         round_ = np.all(self._a == self._b, axis=-1)
         self._centers = self._a[round_]
-        self._round_reach = self._reach[:, round_]
+        # C-ordered, as the compiled gap measure takes them (numpy's mask on a last axis is not).
+        self._round_reach = np.ascontiguousarray(self._reach[:, round_])
         self._long_ends = self._ends[:, :, ~round_]
-        self._long_reach = self._reach[:, ~round_]
+        self._long_reach = np.ascontiguousarray(self._reach[:, ~round_])
         self._pairs_per_link = len(obstacles)
         # How far a point of link i can be from joint j when j moves it (0 when it does not):
         # the step bound of path checks link by link; over every link, the longest way down
