@@ -62,6 +62,31 @@ def _report(level: str, *, footing: dict | None = None) -> object:
     )
 
 
+def test_a_success_counts_as_false_only_off_the_target():
+    def step(passed: bool, state: str, on_target: bool) -> quality.StepReport:
+        return quality.StepReport(
+            index=0,
+            kind="reach",
+            expect="reachable",
+            passed=passed,
+            time_to_reach=None,
+            overshoot_pct=None,
+            jitter_px=0.0,
+            jitter_limit_px=0.5,
+            spins=0,
+            final_state=state,
+            expectation_met=None,
+            on_target=on_target,
+        )
+
+    stopped_short = step(False, "success", False)
+    late_on_target = step(False, "success", True)  # its hold cut short by the timeout
+    said_blocked = step(False, "blocked", False)
+    arrived = step(True, "success", True)
+    assert quality.false_successes([stopped_short]) == 1
+    assert quality.false_successes([late_on_target, said_blocked, arrived]) == 0
+
+
 def test_the_footing_column_shows_only_with_a_creature_in_the_table():
     chain = _report("02_chain.toml")
     table = quality.markdown([chain])
