@@ -25,7 +25,6 @@ from ikgame.control.dynamics import ChainInertia
 from ikgame.control.gait import Footing, Gait, GaitParams, Terrain
 from ikgame.control.servo import Servo
 from ikgame.kinematics import Avoider, Clearance, Obstacles, SolveStatus, TargetSet
-from ikgame.kinematics.clearance import SEARCH_RATE
 from ikgame.level.model import (
     CHAIN_EFFECTOR,
     MAX_COORD,
@@ -675,8 +674,8 @@ def _avoider(level: Level, world: World, scene: Scene) -> Avoider | None:
     # quality suite's runs onto routes that failed. Without replan, the avoider re-plans only
     # for a chain that rests pressed into an obstacle.
     room = Clearance(world.skeleton, world.link_widths / 2.0, obstacles)
-    # The search's share of each tick: the same work a simulated second at any tick rate.
-    return Avoider(room, replan=world.is_tree, budget=SEARCH_RATE / level.world.tick_rate)
+    # Its search's work and its waits the same in simulated time at any tick rate.
+    return Avoider(room, replan=world.is_tree, tick_rate=level.world.tick_rate)
 
 
 def _scene(level: Level, world: World, script: ScriptRunner) -> Scene:

@@ -195,14 +195,15 @@ LEAD: Final = 0.3
 """Most a pose commanded on a route's piece leads the joint that has come least far along it,
 radians (on the joint that turns most over the piece)."""
 
-RELEASE_CALLS: Final = 120
-"""Calls at rest on a clear goal after which the solver answers again even short of the target
-(half a second at 240 ticks/s)."""
+RELEASE_S: Final = 0.5
+"""Time at rest on a clear goal after which the solver answers again even short of the target,
+simulated s (120 calls at 240 ticks/s)."""
 
-PINNED_CALLS: Final = 24
-"""Calls a chain rests pressed into an obstacle, off its route, before a route on is planned
-from there (a tenth of a second at 240 ticks/s; the simulation judges a chain blocked after
-half a second without progress)."""
+PINNED_S: Final = 0.1
+"""Time a chain rests pressed into an obstacle, off its route, before a route on is planned
+from there, simulated s (24 calls at 240 ticks/s; the simulation judges a chain blocked after
+half a second without progress, so a count of calls would leave a chain at 30 ticks/s judged
+blocked before it planned again)."""
 
 JAMMED_WORK: Final = 150_000
 """Most units of work a search spends on a route to the clear pose nearest a target that no
@@ -1586,7 +1587,7 @@ class Avoider:
     (:meth:`Clearance.clear_answer`) and, when the straight way to it is blocked, the next via pose
     of a route (:meth:`Clearance.route`), with status ``PROCESSING``. The clear answer and the route
     are kept until the target moves, so they are searched once (a chain resting short of the target
-    for ``RELEASE_CALLS`` calls is handed back to the solver). When the obstacles keep every clear
+    for ``RELEASE_S`` is handed back to the solver). When the obstacles keep every clear
     pose from the target (it lies under the floor), the chain is sent instead to the clear pose
     nearest it, by a route if one is found within ``JAMMED_WORK``, else to the pose the polish
     draws it to from where it is, and kept there (:attr:`jammed`): it rests held off the
@@ -1595,15 +1596,16 @@ class Avoider:
     without obstacles (and a jammed one is reported blocked). With ``replan``, a chain the
     motors carried off the planned line, whose straight way on to its via pose is blocked from
     where it is, gets a new route from there; without it, only one that rests there with a link
-    pressed into an obstacle (see ``PINNED_CALLS``). While the base moves (its
+    pressed into an obstacle (see ``PINNED_S``). While the base moves (its
     :attr:`clearance`'s skeleton is another one each call) nothing is planned, and the solver's
     answers are handed on until they bring a link within ``ACTIVE`` px of the margin of an
     obstacle nearer it: from then on, until no link is that near, the pose commanded the call
     before is polished onto the target for where the base is now (``HOLD_OFF_ITERATIONS``
     iterations at most), so the links near it come no nearer as the base carries them by.
 
-    The search is spread over calls: each does at most ``budget`` units of its work
-    (``ITERATION_UNITS`` per polish iteration, ``CHECK_UNITS`` per step of a path check and
+    A call is a tick of ``tick_rate`` ticks a simulated second. The search is spread over calls:
+    each does at most ``budget`` units of its work (by default ``SEARCH_RATE``'s share of a tick;
+    ``ITERATION_UNITS`` per polish iteration, ``CHECK_UNITS`` per step of a path check and
     ``POSE_UNITS`` per pose checked, link and obstacle; a count, not a clock, so runs repeat
     exactly) and then stops until the next call, in the same order as all at once, so it finds
     what one call would have found, some calls later. While it runs (see :attr:`planning`), with
@@ -1632,8 +1634,18 @@ class Avoider:
     """
 
     def __init__(
-        self, clearance: Clearance, *, replan: bool = False, budget: float = SEARCH_BUDGET
+        self,
+        clearance: Clearance,
+        *,
+        replan: bool = False,
+        tick_rate: float = 240.0,
+        budget: float | None = None,
     ) -> None:
+        if not (math.isfinite(tick_rate) and tick_rate > 0):
+            raise ValueError(
+                f"tick_rate must be a positive number of calls a second, got {tick_rate!r}"
+            )
+        budget = SEARCH_RATE / tick_rate if budget is None else budget
         if not budget > 0:
             raise ValueError(f"budget must be a positive number of work units, got {budget!r}")
         # numpy loads its random module on first use (several ms): load it with the avoider,
@@ -1646,6 +1658,9 @@ class Avoider:
         self.budget = budget
         """Units of search work one call does at most before its last step (``math.inf``: the
         whole search in one call)."""
+        # RELEASE_S and PINNED_S in calls.
+        self._release_after = max(1, round(RELEASE_S * tick_rate))
+        self._pinned_after = max(1, round(PINNED_S * tick_rate))
         self._skeleton = clearance.skeleton
         self._held_off: np.ndarray | None = None
         self._carried: tuple[Skeleton, np.ndarray, np.ndarray, bool] | None = None
@@ -2114,8 +2129,8 @@ class Avoider:
     def _arrived(self, measured: np.ndarray, target: np.ndarray | TargetSet) -> bool:
         """Whether the solver may answer again: the chain has rested on the clear goal (within
         ``SETTLED`` of it on every joint, no targeted end coming more than the goal's tolerance
-        nearer its target or farther from it) for ``RELEASE_CALLS`` calls with a targeted end
-        still farther than the tolerance from its target (sagging short, say), where re-solving
+        nearer its target or farther from it) for ``RELEASE_S`` with a targeted end still
+        farther than the tolerance from its target (sagging short, say), where re-solving
         from the measured pose brings it the last pixels. A long chain within ``SETTLED`` on
         every joint can still be far from its goal, still closing in, and is not at rest.
 
@@ -2133,13 +2148,13 @@ class Avoider:
         if self._resting == 0 or np.any(np.abs(misses - self._rest_misses) > self._tolerance):
             self._resting, self._rest_misses = 0, misses
         self._resting += 1
-        if self._resting < RELEASE_CALLS:
+        if self._resting < self._release_after:
             return False
         return bool(np.any(misses > self._tolerance))
 
     def _pinned(self, measured: np.ndarray) -> bool:
-        """Whether the chain has rested (within ``SETTLED`` on every joint) for ``PINNED_CALLS``
-        calls with a link pressed into an obstacle: the motors carried it off the planned line
+        """Whether the chain has rested (within ``SETTLED`` on every joint) for ``PINNED_S``
+        with a link pressed into an obstacle: the motors carried it off the planned line
         into one, and it stays there. A link that brushes an obstacle on its way along the
         line (a long chain low over the floor) moves on, and keeps its route.
 
@@ -2161,7 +2176,7 @@ class Avoider:
         if self._pin is None or not _within(measured, self._pin):
             self._pin, self._pinned_calls = measured.copy(), 0
         self._pinned_calls += 1
-        return self._pinned_calls >= PINNED_CALLS
+        return self._pinned_calls >= self._pinned_after
 
     def _clear_way(self, measured: np.ndarray, pose: np.ndarray) -> bool:
         """Whether the straight line from ``measured`` to ``pose`` is clear.

@@ -16,7 +16,7 @@ from ikgame.kinematics import (
 from ikgame.kinematics.clearance import (
     ITERATION_UNITS,
     LEAD,
-    PINNED_CALLS,
+    PINNED_S,
     SEARCH_BUDGET,
     SLIDE_ROOM,
     SLIDE_STEP,
@@ -1008,11 +1008,17 @@ def test_a_set_out_of_joint_reach_settles_clear_but_not_through_the_floor():
     assert room.clear_answer(RAISED, RAISED, under_the_floor, 0.5) is None
 
 
-def _shelf_route(replan: bool = False) -> tuple[Clearance, Avoider, Solution, np.ndarray]:
-    """The shelf room, an avoider (with ``replan`` or not) that has planned a route in under
-    the shelf from the arm held up, the solver's answer and the target."""
+PINNED_CALLS = round(PINNED_S * 240)  # calls at the default 240 a second
+
+
+def _shelf_route(
+    replan: bool = False, tick_rate: float = 240.0
+) -> tuple[Clearance, Avoider, Solution, np.ndarray]:
+    """The shelf room, an avoider (with ``replan`` or not, called ``tick_rate`` times a
+    second) that has planned a route in under the shelf from the arm held up, the solver's
+    answer and the target."""
     room = _shelf_room()
-    guide = Avoider(room, replan=replan)
+    guide = Avoider(room, replan=replan, tick_rate=tick_rate)
     target = np.array([290.0, 45.0])
     through = Solution(np.array([-0.3, -1.2, -0.6]), SolveStatus.SUCCESS, 10, 0.0)
     while guide.steer(np.array([0.5, 0.3, 0.2]), through, target, 0.5) and guide.planning:
@@ -1034,15 +1040,18 @@ def test_with_replan_a_chain_carried_off_its_route_gets_a_new_one_from_where_it_
     assert room.path_clear(off, command.angles) is replan
 
 
+@pytest.mark.parametrize("tick_rate", [30.0, 240.0])
 @pytest.mark.parametrize("pressed", [False, True])
-def test_a_chain_pinned_against_an_obstacle_off_its_route_gets_a_new_one(pressed):
-    room, guide, through, target = _shelf_route()
+def test_a_chain_pinned_against_an_obstacle_off_its_route_gets_a_new_one(pressed, tick_rate):
+    room, guide, through, target = _shelf_route(tick_rate=tick_rate)
     first = guide._way[0].copy()
     # Off the line, the straight way on to the via pose blocked either way; pressed, the last
-    # link lies 1.6 px into the shelf, where the motors hold it.
+    # link lies 1.6 px into the shelf, where the motors hold it. PINNED_S is 24 calls at 240
+    # ticks a second and 3 at 30: well inside the half second after which a chain that makes
+    # no progress is judged blocked, at any tick rate.
     off = np.array([0.3, -1.85, 0.0]) if pressed else np.array([0.0, -1.8, 0.0])
     assert bool(room.gaps(off).min() < 0.0) is pressed
-    for _ in range(PINNED_CALLS - 1):
+    for _ in range(round(PINNED_S * tick_rate) - 1):
         guide.steer(off, through, target, 0.5)
     assert np.array_equal(guide._way[0], first)  # it may yet move on
     guide.steer(off, through, target, 0.5)
@@ -1165,9 +1174,14 @@ def test_a_target_that_moves_every_call_still_gets_a_plan_and_is_followed():
     assert np.hypot(*(room.points(measured)[-1] - target)) <= 5.0
 
 
-def test_the_budget_is_a_positive_amount_of_work():
+def test_the_budget_is_a_positive_amount_of_work_and_the_tick_rate_a_positive_rate():
     with pytest.raises(ValueError, match="budget"):
         Avoider(_shelf_room(), budget=0)
+    for rate in (0.0, -240.0, math.inf, math.nan):
+        with pytest.raises(ValueError, match="tick_rate"):
+            Avoider(_shelf_room(), tick_rate=rate)
+    # By default a call does its tick's share of a simulated second's work.
+    assert Avoider(_shelf_room(), tick_rate=120.0).budget == 2 * SEARCH_BUDGET
 
 
 def _holding_up(budget: float) -> tuple[Avoider, np.ndarray, Solution, np.ndarray]:
