@@ -1468,25 +1468,34 @@ def _far_seeds(
     drawn: int = RANDOM_SEEDS,
     chained: bool = False,
 ) -> _Seeds:
-    """Restarts elsewhere in the joints' ranges, each run by the solver and by its fallback
-    (see :func:`_both`, which ``chained`` goes to); ``drawn`` of them random."""
+    """Restarts elsewhere in the joints' ranges (:func:`_far_poses`), each run by the solver
+    and by its fallback (see :func:`_both`, which ``chained`` goes to)."""
+    for pose in _far_poses(skeleton, stalled, target, drawn):
+        yield from _both(pose, solve, fallback, chained)
+
+
+def _far_poses(
+    skeleton: Skeleton, stalled: np.ndarray, target: np.ndarray, drawn: int
+) -> Iterator[np.ndarray]:
+    """The far restarts, in order: round each of the first ``ROUND_JOINTS`` joints' limits,
+    mirrored, bends reversed, stretched toward the target, the middle of every range, then
+    ``drawn`` random poses; each (but the stretched one) aimed at the target."""
     points = _chain_points(skeleton, stalled)
     for j in range(min(ROUND_JOINTS, skeleton.count)):
         round_the_limit = _the_other_way_round(skeleton, stalled, points, j, target)
         if round_the_limit is not None:
-            yield from _both(round_the_limit, solve, fallback, chained)
+            yield round_the_limit
     heading = math.atan2(*(target - skeleton.base)[::-1]) - skeleton.base_angle
     mirrored = -stalled
     mirrored[0] = 2.0 * heading - stalled[0]
-    yield from _both(_aimed(skeleton, skeleton.clamp(mirrored), target), solve, fallback, chained)
+    yield _aimed(skeleton, skeleton.clamp(mirrored), target)
     bends_reversed = -stalled
     bends_reversed[0] = stalled[0]
-    bends = _aimed(skeleton, skeleton.clamp(bends_reversed), target)
-    yield from _both(bends, solve, fallback, chained)
-    yield from _both(_stretched_toward(skeleton, target), solve, fallback, chained)
-    yield from _both(_aimed(skeleton, _middle(skeleton), target), solve, fallback, chained)
+    yield _aimed(skeleton, skeleton.clamp(bends_reversed), target)
+    yield _stretched_toward(skeleton, target)
+    yield _aimed(skeleton, _middle(skeleton), target)
     for pose in _random_poses(skeleton, drawn):
-        yield from _both(_aimed(skeleton, pose, target), solve, fallback, chained)
+        yield _aimed(skeleton, pose, target)
 
 
 def _the_other_way_round(
