@@ -97,7 +97,6 @@ __all__ = [
     "POSE_UNITS",
     "POLISH_REACH",
     "JAMMED_WORK",
-    "SEARCH_BUDGET",
     "SEARCH_RATE",
     "Avoider",
     "Clearance",
@@ -222,10 +221,6 @@ and eleven of its runs arrived too late. A unit is about 4.5 us of CPU time on t
 development machine with numpy's gap measure, 2.2 to 2.4 us with the compiled one
 (:mod:`~ikgame.kinematics._compiled_gaps`): a tick's 1,200 at 240 ticks/s, about 5.4 and 2.8
 ms."""
-
-SEARCH_BUDGET: Final = SEARCH_RATE / 240
-"""Units of work an :class:`Avoider`'s search does in one call at most, before its last step,
-by default: ``SEARCH_RATE``'s share of a tick at the levels' default 240 ticks/s."""
 
 ITERATION_UNITS: Final = 40
 """Units of search work one polish iteration counts for."""
@@ -373,11 +368,10 @@ class Clearance:
         # ones (segments), which need their ends and crossings measured too.
         round_ = np.all(self._a == self._b, axis=-1)
         self._centers = self._a[round_]
-        # C-ordered, as the compiled gap measure takes them (numpy's mask on a last axis is not).
+        # C-ordered, as the compiled gap measure takes them (numpy's masks leave them not).
         self._round_reach = np.ascontiguousarray(self._reach[:, round_])
-        self._long_ends = self._ends[:, :, ~round_]
+        self._long_ends = np.ascontiguousarray(self._ends[:, :, ~round_])
         self._long_reach = np.ascontiguousarray(self._reach[:, ~round_])
-        self._pairs_per_link = len(obstacles)
         # How far a point of link i can be from joint j when j moves it (0 when it does not):
         # the step bound of path checks link by link; over every link, the longest way down
         # from joint j through its subtree.
@@ -474,7 +468,7 @@ class Clearance:
         if links is not None:
             starts, ends = starts[..., links, :], ends[..., links, :]
             round_reach, long_reach = round_reach[links], long_reach[links]
-        compiled = compiled_gaps(starts[..., 0].size * self._pairs_per_link)
+        compiled = compiled_gaps(starts[..., 0].size * len(self.obstacles))
         if compiled is not None:
             q0, q1 = self._long_ends[0, 0], self._long_ends[1, 0]
             return compiled(starts, ends, self._centers, round_reach, q0, q1, long_reach)

@@ -17,7 +17,7 @@ from ikgame.kinematics.clearance import (
     ITERATION_UNITS,
     LEAD,
     PINNED_S,
-    SEARCH_BUDGET,
+    SEARCH_RATE,
     SLIDE_ROOM,
     SLIDE_STEP,
     TREE_FIRST,
@@ -379,7 +379,7 @@ def test_a_chain_hooked_round_a_shelfs_end_gets_a_way_in_under_it_within_half_a_
     assert room.is_clear(hooked) and not room.is_clear(through.angles)
     guide = Avoider(room)
     commands = _settle(guide, hooked, through, target)
-    assert len(commands) <= 120  # calls of SEARCH_BUDGET units: half a second at 240 ticks/s
+    assert len(commands) <= 120  # half a second at 240 ticks/s
     assert not np.array_equal(commands[-1].angles, through.angles)  # not given up
     arrived = _move_as_told(guide, hooked, through, target, 600)
     assert room.is_clear(arrived)
@@ -1112,8 +1112,8 @@ def test_one_steer_call_searches_no_more_than_its_budget(monkeypatch):
         if not guide.planning:
             break
     # The whole search polishes hundreds of times; a call stops once the budget is spent.
-    assert sum(calls) > 5 * SEARCH_BUDGET / ITERATION_UNITS
-    assert max(calls) <= SEARCH_BUDGET // ITERATION_UNITS + 1
+    assert sum(calls) > 5 * guide.budget / ITERATION_UNITS
+    assert max(calls) <= guide.budget // ITERATION_UNITS + 1
     assert not guide.planning
 
 
@@ -1181,7 +1181,7 @@ def test_the_budget_is_a_positive_amount_of_work_and_the_tick_rate_a_positive_ra
         with pytest.raises(ValueError, match="tick_rate"):
             Avoider(_shelf_room(), tick_rate=rate)
     # By default a call does its tick's share of a simulated second's work.
-    assert Avoider(_shelf_room(), tick_rate=120.0).budget == 2 * SEARCH_BUDGET
+    assert Avoider(_shelf_room(), tick_rate=120.0).budget == SEARCH_RATE / 120
 
 
 def _holding_up(budget: float) -> tuple[Avoider, np.ndarray, Solution, np.ndarray]:

@@ -158,14 +158,13 @@ def test_a_joint_knocked_toward_its_stop_halts_at_it_not_a_step_past_it(speed):
     assert angles[-1] == pytest.approx(math.radians(30.0), abs=math.radians(0.5))
 
 
-def test_a_joint_whipped_by_a_floor_strike_halts_at_its_stop():
+def test_a_joint_whipped_by_a_floor_strike_halts_at_its_stop(stress_simulation):
     # The stress level that found it: thirty light links swept low, the 24th strikes the
     # floor, and joints 21 and 22 whip round at about 2,300 deg/s for ten ticks. The contact's
     # own correction of its overlap held joint 21 back within the step its stop was braced
     # in, short of a stop braced where its velocity alone would have put it; the limit stayed
     # idle and the next step carried the joint 3.9 deg past its real stop.
-    path = Path(__file__).parents[2] / "benchmarks" / "stress_levels" / "48_chain30_gravity.toml"
-    sim = Simulation(load_level(path), solver="dls", record=False)
+    sim = stress_simulation("48_chain30_gravity", "dls")
     # The obstacle planner's share of a tick when the whip was found: the same way to it.
     sim.controller.avoider.budget = 600
     world = sim.world
