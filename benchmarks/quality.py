@@ -131,12 +131,12 @@ class StepReport:
     final_state: str
     expectation_met: bool | None
     optimum_gap_px: float | None = None
+    """For a conflict: the largest difference between an effector's error at rest and its
+    error at the kinematic optimum, px."""
     on_target: bool = False
     """A reach step whose effectors stayed within its tolerance over its last ``ON_TARGET_S``:
     unpassed, a chain on its target whose hold the timeout cut short (late, not misreported),
     not one swinging through it."""
-    """For a conflict: the largest difference between an effector's error at rest and its
-    error at the kinematic optimum, px."""
 
 
 @dataclass
