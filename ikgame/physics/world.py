@@ -636,7 +636,7 @@ class World:
         """Step the space by ``dt`` s, in parts of at most :data:`MAX_STEP_S`, with the joint
         stops braced (see :class:`_Stops`), from the tick's :meth:`joint_state` (``read``;
         None: the bodies are read here) and then from each part's."""
-        parts = math.ceil(dt / MAX_STEP_S - 1e-9)
+        parts = max(1, math.ceil(dt / MAX_STEP_S - 1e-9))
         part = dt / parts
         self._space_dt = part
         stops = self._stops
@@ -645,8 +645,8 @@ class World:
             if i:
                 read = None
                 if loaded:
-                    # pymunk clears the applied loads after every step: the tick's hold for all
-                    # of it.
+                    # pymunk clears the applied loads after every step: the tick's loads act
+                    # over all of it.
                     pymunk.batch.set_space_bodies(self.space, _LOADS, self._rows.writes)
             if not stops.joints:
                 self.space.step(part)

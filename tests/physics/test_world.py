@@ -86,6 +86,10 @@ def test_a_tick_longer_than_the_longest_space_step_is_stepped_in_parts():
 
     assert MAX_STEP_S == 1 / 240
     assert run(1 / 120).tolist() == run(1 / 240).tolist()
+    still = World(_level(links, gravity=(0.0, -900.0), angle=20.0))
+    before = still.joint_angles()
+    still.step(0.0)  # no time, no step
+    assert still.joint_angles().tolist() == before.tolist()
 
 
 def test_rotary_limit_holds_a_joint_driven_past_it():
