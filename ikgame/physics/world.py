@@ -636,27 +636,34 @@ class World:
         """Step the space by ``dt`` s, in parts of at most :data:`MAX_STEP_S`, with the joint
         stops braced (see :class:`_Stops`), from the tick's :meth:`joint_state` (``read``;
         None: the bodies are read here) and then from each part's."""
-        parts = max(1, math.ceil(dt / MAX_STEP_S - 1e-9))
-        part = dt / parts
-        self._space_dt = part
-        stops = self._stops
         loaded, self._loaded = self._loaded, False
-        for i in range(parts):
-            if i:
-                read = None
-                if loaded:
-                    # pymunk clears the applied loads after every step: the tick's loads act
-                    # over all of it.
-                    pymunk.batch.set_space_bodies(self.space, _LOADS, self._rows.writes)
-            if not stops.joints:
-                self.space.step(part)
-                continue
-            if read is None:
-                read = self.joint_state()
-                self._joints = self._link_angles = None
-            braced = stops.brace(*read, part)
-            self.space.step(part)
-            stops.release(braced)
+        if dt <= MAX_STEP_S:
+            self._space_dt = dt
+            self._step_part(dt, read)
+            return
+        parts = math.ceil(dt / MAX_STEP_S - 1e-9)
+        part = self._space_dt = dt / parts
+        self._step_part(part, read)
+        for _ in range(parts - 1):
+            if loaded:
+                # pymunk clears the applied loads after every step: the tick's loads act over
+                # all of it.
+                pymunk.batch.set_space_bodies(self.space, _LOADS, self._rows.writes)
+            self._step_part(part, None)
+
+    def _step_part(self, dt: float, read: tuple[np.ndarray, np.ndarray] | None) -> None:
+        """One step of the space, ``dt`` s, with the joint stops braced from ``read`` (the
+        joints' angles and velocities; None: the bodies are read here)."""
+        stops = self._stops
+        if not stops.joints:
+            self.space.step(dt)
+            return
+        if read is None:
+            read = self.joint_state()
+            self._joints = self._link_angles = None
+        braced = stops.brace(*read, dt)
+        self.space.step(dt)
+        stops.release(braced)
 
     def diverged(self) -> bool:
         """True when any link's, prop's or the base's pose is NaN, infinite, or absurdly far.
