@@ -41,6 +41,7 @@ from pathlib import Path
 import _checkout  # noqa: F401  (first: this checkout's ikgame)
 import numpy as np
 from chains import chain_level
+from quality import STRESS_DIR
 
 from ikgame.kinematics import SOLVERS, Skeleton, _compiled, _compiled_gaps, forward_kinematics
 from ikgame.kinematics.clearance import Clearance, Obstacles
@@ -54,7 +55,6 @@ from ikgame.sim import Simulation
 
 ROOT = Path(__file__).resolve().parents[1]
 BARE_ITERATIONS = 20  # pymunk iterations of the bare reference step
-STRESS_DIR = ROOT / "benchmarks" / "stress_levels"
 SEARCH_LEVELS = ["55_pocket_behind_wall_both_folds", "73_seven_links_rocks_low_gaps"]
 # A floor, a shelf with a lip, a wall and two rocks: the search benchmark's room (px).
 SEARCH_SEGMENTS = np.array(
