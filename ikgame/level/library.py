@@ -15,7 +15,10 @@ __all__ = [
     "resolve_level",
 ]
 
-_ROOT: Final = Path(__file__).resolve().parents[2]
+_PACKAGE: Final = Path(__file__).resolve().parents[1]
+# An installed wheel carries the levels and assets inside the package (pyproject.toml maps them
+# there); a checkout, installed editable or not at all, keeps them beside it.
+_ROOT: Final = _PACKAGE if (_PACKAGE / "levels").is_dir() else _PACKAGE.parent
 LEVELS_DIR: Final = _ROOT / "levels"
 """The shipped levels, numbered in learning order."""
 ASSETS_DIR: Final = _ROOT / "assets"

@@ -14,7 +14,7 @@ import re
 from dataclasses import astuple, dataclass, fields
 from pathlib import Path
 
-import ikgame
+from ikgame.level.library import THEMES_DIR
 
 __all__ = [
     "EFFECTOR_PALETTE",
@@ -42,8 +42,6 @@ third: the first two stay clear of a goal region's usual green): the effector co
 file that names none."""
 UPCOMING_FADE = 0.45  # opacity of a tree effector's colour over the background, for its upcoming
 
-# The repo is installed editable, so assets sit beside the package rather than inside it.
-THEMES_DIR = Path(ikgame.__file__).resolve().parent.parent / "assets" / "themes"
 # Keys a theme file may carry besides colours: documentation for whoever edits it.
 _INFO_KEYS = frozenset({"name", "description"})
 MAX_THEME_BYTES = 1_000_000
