@@ -756,7 +756,10 @@ class RobustSolver:
                     skeleton, (skeleton.clamp(start), plain.angles), target, strain, slope
                 ),
             )
-        if goal != self._way_searched and strain(start) > SPENT and not way(HOLDS)(plain.angles):
+        if goal == self._way_searched:
+            return None
+        unsafe = not way(STRAINED)(plain.angles)
+        if unsafe or (strain(start) > SPENT and not way(HOLDS)(plain.angles)):
             # An answer the motors hold at rest but not on the way to it with the margin they
             # rest with (HOLDS): from the pose where a torque-bound target left
             # `46_heavy_weak_second_branch` (its base at 0.95 of its limit), CCD's and FABRIK's
@@ -764,9 +767,14 @@ class RobustSolver:
             # its braking taking torque the base did not have, passed its goal by 30 deg. An
             # answer whose way the motors hold so is searched for; with none (an arm lifted
             # from a stretched rest, where no straight way holds), the plain answer it is,
-            # unless it leaves them less than the margin at rest (see _held_way).
+            # unless it leaves them less than the margin at rest (see _held_way). From any
+            # rest, so is one whose way asks more than the motors have (``unsafe``): the
+            # upright arm of `80_heavy_weak_three_swing_over`, leaning toward CCD's answer
+            # (0.97 at rest, 1.19 on the way), fell past the target onto the floor.
             search, iterations = self._searched(plain, target, tol, seeds(), holds, way(HOLDS))
-            return self._held_way(plain, goal, target, search, iterations)
+            if search.origin is None:
+                search.origin = skeleton.clamp(start)
+            return self._held_way(plain, goal, target, search, iterations, unsafe)
         return None
 
     def _held(
@@ -858,10 +866,13 @@ class RobustSolver:
         target: np.ndarray,
         search: _Search,
         iterations: int,
+        unsafe: bool,
     ) -> Solution | None:
         """After a plain solve whose answer the motors hold (or one on its way) but not the
         way to it, the ``search`` for an arrival they hold through poses they hold: it replaces
-        the plain answer. The plain answer serves while the search goes on; once it has tried
+        the plain answer. The plain answer serves while the search goes on, unless its way
+        asks more than the motors have somewhere (``unsafe``): then the pose the search began
+        from does (``processing``), where the ways it finds start; once it has tried
         every seed, None (the plain answer is taken as any other), but where the motors do not
         hold the plain answer with the margin they rest with (:data:`HOLDS`) and the search
         found an arrival they do (whose way they do not hold either), that arrival.
@@ -880,6 +891,11 @@ class RobustSolver:
             answer = Solution(search.best, SolveStatus.SUCCESS, iterations, error)
             return self._keep(answer, goal, followed=True)
         if not search.exhausted:
+            if unsafe and search.origin is not None:
+                # The chain stays where the search began (where the ways it finds start)
+                # rather than set off on one the motors cannot hold.
+                error = _error(self._skeleton, search.origin, target)
+                return Solution(search.origin, SolveStatus.PROCESSING, iterations, error)
             return replace(plain, iterations=iterations)
         self._way_searched = goal
         self._search = None
@@ -943,6 +959,8 @@ class _Search:
         the motors hold, say); None: every one does."""
         self.fallback: np.ndarray | None = None
         """The first arrival that counts but does not end the search, if any."""
+        self.origin: np.ndarray | None = None
+        """The pose (radians) the chain was in when the search began, where its ways start."""
         self.nearest: Generator[int, None, np.ndarray | None] | None = None
         """Once every seed has failed, the steps toward the pose nearest the target that
         counts (see :func:`held_nearest`), under way."""
