@@ -311,8 +311,10 @@ class Controller:
         solver = self.solver
         if servo is None or not self.skeleton.is_chain or not any(pull):
             solver.strain = solver.strain_slope = None
+            solver.most_strain = math.inf
         else:
             world = self._skeleton.world_angles
+            solver.most_strain = servo.most_strain(pull)
             solver.strain = lambda angles: servo.strain(world(angles), pull)
             # The servo's slope is per joint turning everything beyond it: a chain's local
             # angles.

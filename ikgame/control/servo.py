@@ -173,6 +173,20 @@ class Servo:
         held = Pose(self.inertia, world_angles).loads(gravity=gravity).torques
         return float(np.max(np.abs(held) / self.max_torque))
 
+    def most_strain(self, gravity: tuple[float, float]) -> float:
+        """A bound on :meth:`strain` over every pose, from one pass over the links: each
+        joint's load taken as if the chain beyond it lay out level with each link's weight at
+        its far end. A chain whose motors that leaves within their limits holds any pose.
+
+        >>> one = ChainInertia(np.array([10.0]), np.array([2.0]), np.array([50.0 / 3.0]))
+        >>> servo = Servo(one, max_torque=np.array([1.8e4]), max_speed=np.ones(1), gain=12.0)
+        >>> servo.most_strain((0.0, -900.0))
+        1.0
+        """
+        inertia = self.inertia
+        lever = inertia.beyond(np.asarray(inertia.lengths, dtype=float) * inertia.mass_beyond)
+        return math.hypot(*gravity) * float(np.max(lever / self.max_torque))
+
     def strain_slope(self, world_angles: np.ndarray, gravity: tuple[float, float]) -> np.ndarray:
         """(n,) how :meth:`strain` at ``world_angles`` changes as each joint turns, everything
         beyond it turning with it, per radian: the slope of the joint that strains most. One

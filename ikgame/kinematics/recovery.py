@@ -308,6 +308,10 @@ class RobustSolver:
         """The gradient of :attr:`strain` at a pose (per joint, per radian), if known in closed
         form: without it, the slides down the strain take it by differences, which ask the
         strain once per joint (on a thousand links, 88 ms a step)."""
+        self.most_strain = math.inf
+        """The most :attr:`strain` can be at any pose, if a bound is known: where it is
+        within ``STRAINED``, no way to an answer needs checking for poses the motors cannot
+        hold."""
         self.solver_name = solver_name
 
     @property
@@ -758,7 +762,7 @@ class RobustSolver:
             )
         if goal == self._way_searched:
             return None
-        unsafe = not way(STRAINED)(plain.angles)
+        unsafe = self.most_strain > STRAINED and not way(STRAINED)(plain.angles)
         if unsafe or (strain(start) > SPENT and not way(HOLDS)(plain.angles)):
             # An answer the motors hold at rest but not on the way to it with the margin they
             # rest with (HOLDS): from the pose where a torque-bound target left

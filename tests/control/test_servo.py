@@ -492,3 +492,26 @@ def test_joints_brought_in_together_close_their_errors_in_the_same_time(floats):
     # The base at its 1 rad/s, the others at its pace: their errors stay in proportion.
     assert np.allclose(error / np.array([1.0, -1.5, 2.0]), error[0], rtol=1e-6)
     assert 0.0 < error[0] < 0.1
+
+
+@pytest.mark.parametrize("links", [1, 4, 40])
+def test_the_most_strain_bounds_every_pose_and_is_met_stretched_out_with_point_masses(links):
+    # Random chains (seeded), many of them more than FLOAT_LINKS long: no pose asks more of
+    # the motors than the bound, and the chain stretched out level asks at least half of it
+    # (its centres lie half a link short of the ends the bound puts the weight at).
+    rng = np.random.default_rng(links)
+    lengths = rng.uniform(20.0, 90.0, links)
+    masses = rng.uniform(0.2, 2.0, links)
+    inertia = ChainInertia(lengths, masses, masses * lengths**2 / 12.0)
+    servo = Servo(
+        inertia,
+        max_torque=rng.uniform(1e4, 1e6, links),
+        max_speed=np.ones(links),
+        gain=12.0,
+    )
+    gravity = (0.0, -1300.0)
+    most = servo.most_strain(gravity)
+    poses = rng.uniform(-math.pi, math.pi, (200, links))
+    assert max(servo.strain(np.cumsum(pose), gravity) for pose in poses) <= most
+    assert servo.strain(np.zeros(links), gravity) >= 0.5 * most
+    assert servo.most_strain((0.0, 0.0)) == 0.0
