@@ -5,6 +5,8 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Final
 
+from ikgame import _shipped
+
 __all__ = [
     "LEVELS_DIR",
     "ASSETS_DIR",
@@ -15,15 +17,11 @@ __all__ = [
     "resolve_level",
 ]
 
-_PACKAGE: Final = Path(__file__).resolve().parents[1]
-# An installed wheel carries the levels and assets inside the package (pyproject.toml maps them
-# there); a checkout, installed editable or not at all, keeps them beside it.
-_ROOT: Final = _PACKAGE if (_PACKAGE / "levels").is_dir() else _PACKAGE.parent
-LEVELS_DIR: Final = _ROOT / "levels"
+LEVELS_DIR: Final = _shipped.LEVELS_DIR
 """The shipped levels, numbered in learning order."""
-ASSETS_DIR: Final = _ROOT / "assets"
+ASSETS_DIR: Final = _shipped.ASSETS_DIR
 """Themes, the level JSON Schema, sprites."""
-THEMES_DIR: Final = ASSETS_DIR / "themes"
+THEMES_DIR: Final = _shipped.THEMES_DIR
 """Shipped colour themes, one ``<name>.json`` each."""
 SCHEMA_FILE: Final = ASSETS_DIR / "level.schema.json"
 """The level format's JSON Schema, for editors (kept equal to ``level_schema()`` by a test)."""

@@ -14,7 +14,7 @@ import re
 from dataclasses import astuple, dataclass, fields
 from pathlib import Path
 
-from ikgame.level.library import THEMES_DIR
+from ikgame._shipped import THEMES_DIR
 
 __all__ = [
     "EFFECTOR_PALETTE",
