@@ -183,9 +183,14 @@ class Servo:
         >>> servo.most_strain((0.0, -900.0))
         1.0
         """
+        pull = math.hypot(*gravity)
+        if pull == 0.0:
+            return 0.0
         inertia = self.inertia
-        lever = inertia.beyond(np.asarray(inertia.lengths, dtype=float) * inertia.mass_beyond)
-        return math.hypot(*gravity) * float(np.max(lever / self.max_torque))
+        # Sizes past what floats hold bound nothing: infinity.
+        with np.errstate(over="ignore"):
+            lever = inertia.beyond(np.asarray(inertia.lengths, dtype=float) * inertia.mass_beyond)
+            return pull * float(np.max(lever / self.max_torque))
 
     def strain_slope(self, world_angles: np.ndarray, gravity: tuple[float, float]) -> np.ndarray:
         """(n,) how :meth:`strain` at ``world_angles`` changes as each joint turns, everything
