@@ -309,12 +309,16 @@ class Controller:
             self._fresh.strain = None
         servo = self.servo
         solver = self.solver
-        if servo is None or not self.skeleton.is_chain or not any(pull):
+        solver.most_strain = math.inf
+        if servo is not None and self.skeleton.is_chain and any(pull):
+            solver.most_strain = servo.most_strain(pull)
+        if servo is None or not self.skeleton.is_chain or solver.most_strain <= KEPT_STRAIN:
+            # Without gravity or a servo nothing is known; and where no pose asks as much of
+            # the motors as any of the strain's uses looks for (the least, KEPT_STRAIN),
+            # nothing need ask it: every shipped chain is so.
             solver.strain = solver.strain_slope = None
-            solver.most_strain = math.inf
         else:
             world = self._skeleton.world_angles
-            solver.most_strain = servo.most_strain(pull)
             solver.strain = lambda angles: servo.strain(world(angles), pull)
             # The servo's slope is per joint turning everything beyond it: a chain's local
             # angles.
@@ -548,6 +552,7 @@ class Controller:
             solver = RobustSolver(self._skeleton, self.solver.solver_name)
             solver.strain = self.solver.strain
             solver.strain_slope = self.solver.strain_slope
+            solver.most_strain = self.solver.most_strain
             ahead = self._ahead = (start, solver)
         solver = ahead[1]
         solve = solver.solve_targets if isinstance(target, TargetSet) else solver.solve
