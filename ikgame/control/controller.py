@@ -309,13 +309,12 @@ class Controller:
             self._fresh.strain = None
         servo = self.servo
         solver = self.solver
-        solver.most_strain = math.inf
-        if servo is not None and self.skeleton.is_chain and any(pull):
-            solver.most_strain = servo.most_strain(pull)
-        if servo is None or not self.skeleton.is_chain or solver.most_strain <= KEPT_STRAIN:
-            # Without gravity or a servo nothing is known; and where no pose asks as much of
-            # the motors as any of the strain's uses looks for (the least, KEPT_STRAIN),
-            # nothing need ask it: every shipped chain is so.
+        known = servo is not None and self.skeleton.is_chain
+        solver.most_strain = servo.most_strain(pull) if known else math.inf
+        if not known or solver.most_strain <= KEPT_STRAIN:
+            # Nothing to ask (no servo, or a tree); or no pose asks as much of the motors as
+            # any of the strain's uses looks for (the least, KEPT_STRAIN; without gravity,
+            # nothing at all), and nothing need ask it: every shipped chain is so.
             solver.strain = solver.strain_slope = None
         else:
             world = self._skeleton.world_angles

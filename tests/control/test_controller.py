@@ -476,8 +476,12 @@ def test_a_chain_no_pose_strains_never_asks_the_strain_and_moves_the_same(name, 
     level = load_level(LEVELS_DIR / name)
     skipped = Simulation(level, record=False)
     result = skipped.run().as_dict()
-    assert skipped.controller.solver.strain is None
-    assert 0.0 < skipped.controller.solver.most_strain <= KEPT_STRAIN
+    solver = skipped.controller.solver
+    assert solver.strain is None and 0.0 < solver.most_strain <= KEPT_STRAIN
+    skipped.controller._know_strain((0.0, 0.0))
+    assert solver.strain is None and solver.most_strain == 0.0
+    skipped.controller._know_strain((0.0, -1e6))
+    assert solver.strain is not None and solver.most_strain > KEPT_STRAIN
     asked: list[tuple[float, float]] = []
     strain, most = Servo.strain, Servo.most_strain
 
