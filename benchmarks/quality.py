@@ -117,19 +117,20 @@ _EPS: Final = 1e-9
 
 @dataclass
 class StepReport:
-    """How one scored step of a run went, measured from its ticks."""
+    """How one scored step of a run went, measured from its ticks (a measure that does not
+    apply to the step keeps its default)."""
 
     index: int
     kind: str
     expect: str
     passed: bool
     time_to_reach: float | None
-    overshoot_pct: float | None
-    jitter_px: float | None
-    jitter_limit_px: float | None
-    spins: int
     final_state: str
-    expectation_met: bool | None
+    overshoot_pct: float | None = None
+    jitter_px: float | None = None
+    jitter_limit_px: float | None = None
+    spins: int = 0
+    expectation_met: bool | None = None
     optimum_gap_px: float | None = None
     """For a conflict: the largest difference between an effector's error at rest and its
     error at the kinematic optimum, px."""
@@ -292,12 +293,7 @@ def run_one(path: Path, solver: str, tick_rate: int | None = None) -> RunReport:
             expect=expect,
             passed=outcome.passed,
             time_to_reach=outcome.time_to_reach,
-            overshoot_pct=None,
-            jitter_px=None,
-            jitter_limit_px=None,
-            spins=0,
             final_state=final_state,
-            expectation_met=None,
         )
         reports.append(report)
         if ticks.size == 0 or outcome.kind == "follow":
@@ -604,7 +600,8 @@ def markdown(reports: list[RunReport]) -> str:
     return "\n".join(lines) + "\n\n" + summary(reports) + "\n\n" + legend(reports) + "\n"
 
 
-def _job(args: tuple[str, str, int | None]) -> RunReport:
+def run_job(args: tuple[str, str, int | None]) -> RunReport:
+    """:func:`run_one` of a (level path, solver, tick rate) job, as a process pool maps it."""
     path, solver, tick_rate = args
     return run_one(Path(path), solver, tick_rate)
 
@@ -643,11 +640,11 @@ def main(argv: list[str] | None = None) -> int:
     err = Console(stderr=True)
     if args.jobs > 1:
         with ProcessPoolExecutor(args.jobs) as pool:
-            reports = list(pool.map(_job, jobs))
+            reports = list(pool.map(run_job, jobs))
     else:
         reports = []
         for i, job in enumerate(jobs, 1):
-            reports.append(_job(job))
+            reports.append(run_job(job))
             err.print(f"[{i}/{len(jobs)}] {Path(job[0]).stem} {job[1]}: {reports[-1].wall_s:.1f} s")
     total = time.perf_counter() - started
     console = Console(width=170, highlight=False)

@@ -21,7 +21,7 @@ from pathlib import Path
 from typing import Final
 
 import _checkout  # noqa: F401  (first: this checkout's ikgame)
-from quality import REACHABLE, SOLVER_NAMES, RunReport, load, run_one, stress_levels
+from quality import REACHABLE, SOLVER_NAMES, RunReport, load, run_job, stress_levels
 from rich.console import Console
 from rich.table import Table
 
@@ -105,11 +105,6 @@ def target_times(runs: dict[int, RunReport]) -> list[TargetTimes]:
     return times
 
 
-def _job(args: tuple[str, str, int]) -> tuple[str, str, int, RunReport]:
-    path, solver, rate = args
-    return path, solver, rate, run_one(Path(path), solver, rate)
-
-
 def render(rows: list[TargetTimes], console: Console) -> None:
     """The table of every target's times, and the count of those that pass."""
     table = Table(title=f"Time to reach at {', '.join(map(str, RATES))} ticks/s")
@@ -157,7 +152,8 @@ def main(argv: list[str] | None = None) -> int:
     err = Console(stderr=True)
     runs: dict[tuple[str, str], dict[int, RunReport]] = {}
     with ProcessPoolExecutor(max(args.jobs, 1)) as pool:
-        for i, (path, solver, rate, report) in enumerate(pool.map(_job, jobs), 1):
+        reports = pool.map(run_job, jobs)
+        for i, ((path, solver, rate), report) in enumerate(zip(jobs, reports, strict=True), 1):
             runs.setdefault((path, solver), {})[rate] = report
             err.print(f"[{i}/{len(jobs)}] {Path(path).stem} {solver} at {rate}/s")
     rows = [row for by_rate in runs.values() for row in target_times(by_rate)]

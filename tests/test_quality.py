@@ -70,12 +70,9 @@ def test_a_success_counts_as_false_only_off_the_target():
             expect="reachable",
             passed=passed,
             time_to_reach=None,
-            overshoot_pct=None,
+            final_state=state,
             jitter_px=0.0,
             jitter_limit_px=0.5,
-            spins=0,
-            final_state=state,
-            expectation_met=None,
             on_target=on_target,
         )
 

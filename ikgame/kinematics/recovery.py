@@ -778,7 +778,8 @@ class RobustSolver:
             search, iterations = self._searched(plain, target, tol, seeds(), holds, way(HOLDS))
             if search.origin is None:
                 search.origin = skeleton.clamp(start)
-            return self._held_way(plain, goal, target, search, iterations, unsafe)
+            wait = search.origin if unsafe else None
+            return self._held_way(plain, goal, target, search, iterations, wait)
         return None
 
     def _held(
@@ -870,13 +871,13 @@ class RobustSolver:
         target: np.ndarray,
         search: _Search,
         iterations: int,
-        unsafe: bool,
+        wait: np.ndarray | None,
     ) -> Solution | None:
         """After a plain solve whose answer the motors hold (or one on its way) but not the
         way to it, the ``search`` for an arrival they hold through poses they hold: it replaces
         the plain answer. The plain answer serves while the search goes on, unless its way
-        asks more than the motors have somewhere (``unsafe``): then the pose the search began
-        from does (``processing``), where the ways it finds start; once it has tried
+        asks more than the motors have somewhere: then the pose to ``wait`` in does (where the
+        search began, and the ways it finds start), ``processing``; once it has tried
         every seed, None (the plain answer is taken as any other), but where the motors do not
         hold the plain answer with the margin they rest with (:data:`HOLDS`) and the search
         found an arrival they do (whose way they do not hold either), that arrival.
@@ -895,11 +896,11 @@ class RobustSolver:
             answer = Solution(search.best, SolveStatus.SUCCESS, iterations, error)
             return self._keep(answer, goal, followed=True)
         if not search.exhausted:
-            if unsafe and search.origin is not None:
-                # The chain stays where the search began (where the ways it finds start)
-                # rather than set off on one the motors cannot hold.
-                error = _error(self._skeleton, search.origin, target)
-                return Solution(search.origin, SolveStatus.PROCESSING, iterations, error)
+            if wait is not None:
+                # The chain stays where the search began rather than set off on a way the
+                # motors cannot hold.
+                error = _error(self._skeleton, wait, target)
+                return Solution(wait, SolveStatus.PROCESSING, iterations, error)
             return replace(plain, iterations=iterations)
         self._way_searched = goal
         self._search = None

@@ -170,7 +170,7 @@ class World:
         self.link_widths = np.array([link.width for link in links])
         self._halves = [link.length / 2.0 for link in links]
         self.last_dt = 1.0 / level.world.tick_rate
-        self._space_dt = min(self.last_dt, MAX_STEP_S)
+        self._space_dt = self.last_dt / _parts(self.last_dt)
         """The length of the space's last step, s: the motors' impulses are over it."""
         self._loaded = False  # loads written by drive() since the last step
         self.bodies: list[pymunk.Body] = []
@@ -641,7 +641,7 @@ class World:
             self._space_dt = dt
             self._step_part(dt, read)
             return
-        parts = math.ceil(dt / MAX_STEP_S - 1e-9)
+        parts = _parts(dt)
         part = self._space_dt = dt / parts
         self._step_part(part, read)
         for _ in range(parts - 1):
@@ -865,3 +865,13 @@ def _prop_body(prop: BallProp | BoxProp) -> tuple[pymunk.Body, pymunk.Shape]:
     shape.friction = prop.friction
     shape.elasticity = prop.elasticity
     return body, shape
+
+
+def _parts(dt: float) -> int:
+    """How many equal steps of at most :data:`MAX_STEP_S` the space takes for a tick of ``dt``
+    s (one for a tick no longer, or of no length).
+
+    >>> _parts(1 / 240), _parts(1 / 120), _parts(1 / 100), _parts(0.0)
+    (1, 2, 3, 1)
+    """
+    return max(1, math.ceil(dt / MAX_STEP_S - 1e-9))
