@@ -173,6 +173,32 @@ class Servo:
         held = Pose(self.inertia, world_angles).loads(gravity=gravity).torques
         return float(np.max(np.abs(held) / self.max_torque))
 
+    def braking(
+        self, world_angles: np.ndarray, velocities: np.ndarray, gravity: tuple[float, float]
+    ) -> np.ndarray:
+        """(n,) what each joint may slow its turning by, rad/s^2, as :meth:`command` plans its
+        stop: the share :data:`BRAKE_SHARE` of the torque left on the side that opposes its
+        ``velocities`` (rad/s) once it holds its load under ``gravity`` (px/s^2) at
+        ``world_angles``, never less than that share of :data:`BRAKE_FLOOR` of its limit, over
+        the inertia beyond it.
+
+        >>> one = ChainInertia(np.array([10.0]), np.array([2.0]), np.array([50.0 / 3.0]))
+        >>> servo = Servo(one, max_torque=np.array([1.8e4]), max_speed=np.ones(1), gain=12.0)
+        >>> servo.braking(np.zeros(1), np.ones(1), (0.0, 0.0)).round(1).tolist()
+        [135.0]
+        """
+        if self._floats is not None:
+            pose = self._floats.pose(world_angles)
+            pull = (float(gravity[0]), float(gravity[1]))
+            hold, inertia = pose.loads(gravity=pull)[0], pose.inertia()
+        else:
+            pose = Pose(self.inertia, world_angles)
+            hold, inertia = pose.loads(gravity=gravity).torques, pose.inertia()
+        # Braking a joint turning up (positive) takes torque down: its load helps or eats in.
+        against = np.where(velocities > 0.0, self.max_torque + hold, self.max_torque - hold)
+        floor = BRAKE_FLOOR * self.max_torque
+        return BRAKE_SHARE * np.maximum(against, floor) / inertia
+
     def most_strain(self, gravity: tuple[float, float]) -> float:
         """A bound on :meth:`strain` over every pose, from one pass over the links: each
         joint's load taken as if the chain beyond it lay out level with each link's weight at

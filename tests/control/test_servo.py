@@ -9,7 +9,7 @@ import pytest
 from ikgame.control import _floats, dynamics
 from ikgame.control._floats import FloatInertia
 from ikgame.control.dynamics import ChainInertia, Pose
-from ikgame.control.servo import BRAKE_FLOOR, Servo, ServoCommand
+from ikgame.control.servo import BRAKE_FLOOR, BRAKE_SHARE, Servo, ServoCommand
 from ikgame.kinematics import forward_kinematics
 from ikgame.level.model import Level
 from ikgame.physics.world import build_skeleton
@@ -515,3 +515,29 @@ def test_the_most_strain_bounds_every_pose_and_is_met_stretched_out_with_point_m
     assert max(servo.strain(np.cumsum(pose), gravity) for pose in poses) <= most
     assert servo.strain(np.zeros(links), gravity) >= 0.5 * most
     assert servo.most_strain((0.0, 0.0)) == 0.0
+
+
+@pytest.mark.parametrize("n", [5, 40], ids=["floats", "numpy"])
+def test_braking_is_half_the_torque_left_against_the_motion_over_the_inertia(n):
+    rng = np.random.default_rng(n)
+    inertia = _random_links(rng, n, None)
+    servo = Servo(
+        inertia, max_torque=rng.uniform(2e4, 2e5, n), max_speed=np.full(n, 3.0), gain=12.0
+    )
+    gravity = (0.0, -900.0)
+    for _ in range(5):
+        angles, velocities = inertia.along(rng.uniform(-2, 2, n)), rng.normal(size=n)
+        pose = Pose(inertia, angles)
+        held = pose.loads(gravity=gravity).torques
+        # Stopping a joint turning up takes torque down, which its load adds to or eats into.
+        left = np.where(velocities > 0, servo.max_torque + held, servo.max_torque - held)
+        left = np.maximum(left, BRAKE_FLOOR * servo.max_torque)
+        expected = BRAKE_SHARE * left / pose.inertia()
+        np.testing.assert_allclose(servo.braking(angles, velocities, gravity), expected)
+    # Level, a link rising stops sooner than one falling: its weight helps.
+    one = Servo(
+        _random_links(rng, 1, None), max_torque=np.array([5e4]), max_speed=np.ones(1), gain=12.0
+    )
+    rising = one.braking(np.zeros(1), np.ones(1), gravity)
+    falling = one.braking(np.zeros(1), -np.ones(1), gravity)
+    assert rising[0] > falling[0]
