@@ -186,6 +186,15 @@ def _random_links(rng, n, parents):
     )
 
 
+def _random_servo(rng: np.random.Generator, n: int) -> tuple[ChainInertia, Servo]:
+    """A random chain of ``n`` links (see :func:`_random_links`) and a servo for it."""
+    inertia = _random_links(rng, n, None)
+    servo = Servo(
+        inertia, max_torque=rng.uniform(2e4, 2e5, n), max_speed=np.full(n, 3.0), gain=12.0
+    )
+    return inertia, servo
+
+
 @pytest.mark.parametrize("together", [False, True], ids=["each", "together"])
 @pytest.mark.parametrize("sections", [False, True], ids=["one-factor", "sections"])
 @pytest.mark.parametrize("parents", [None, [-1, 0, 0, 2, -1, 4]], ids=["chain", "tree"])
@@ -218,10 +227,7 @@ def test_the_strain_slope_is_how_the_strain_changes_as_each_joint_turns(n):
     # Against central differences of the strain itself (over floats up to FLOAT_LINKS, over
     # numpy beyond), at poses where one joint strains clearly most.
     rng = np.random.default_rng(n)
-    inertia = _random_links(rng, n, None)
-    servo = Servo(
-        inertia, max_torque=rng.uniform(2e4, 2e5, n), max_speed=np.full(n, 3.0), gain=12.0
-    )
+    inertia, servo = _random_servo(rng, n)
     gravity = (20.0, -900.0)
     checked = 0
     for _ in range(8):
@@ -520,10 +526,7 @@ def test_the_most_strain_bounds_every_pose_and_is_met_stretched_out_with_point_m
 @pytest.mark.parametrize("n", [5, 40], ids=["floats", "numpy"])
 def test_braking_is_half_the_torque_left_against_the_motion_over_the_inertia(n):
     rng = np.random.default_rng(n)
-    inertia = _random_links(rng, n, None)
-    servo = Servo(
-        inertia, max_torque=rng.uniform(2e4, 2e5, n), max_speed=np.full(n, 3.0), gain=12.0
-    )
+    inertia, servo = _random_servo(rng, n)
     gravity = (0.0, -900.0)
     for _ in range(5):
         angles, velocities = inertia.along(rng.uniform(-2, 2, n)), rng.normal(size=n)
