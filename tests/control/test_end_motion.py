@@ -1,4 +1,4 @@
-"""The controller's float helpers against the numpy kinematics they stand in for."""
+"""A short chain's end and its velocity over floats against the numpy kinematics."""
 
 import numpy as np
 import pytest
