@@ -14,7 +14,10 @@ With a servo, an answer that arrives near the chain is solved afresh ``ik_rate``
 (a game's frame rate), not every tick: in between, the servo drives toward it every tick,
 carried along with a moving target by the same joint rates that carry the chain with it.
 Anything else (a new target, a chain on its way to a farther answer, an answer still on its way,
-a search, a plan round obstacles, a moving base) is solved every tick.
+a search, a plan round obstacles, a moving base) is solved every tick. A chain with strong
+motors whose end is about to sweep through a still target on its way to a farther answer is
+caught there instead (see :mod:`~ikgame.control.catching`): the answer is then the pose it stops
+on, and from rest the one from where it stopped.
 """
 
 from __future__ import annotations
