@@ -543,25 +543,23 @@ class Controller:
     def _finish(self, pose: np.ndarray, target: np.ndarray) -> Solution:
         """The answer from ``pose`` (radians) for a chain caught on its way, its end near the
         target: the solver's, if near the pose (within :data:`NEAR`), else the damped
-        least-squares answer from it. Solved afresh, a solver whose answers swing the whole
+        least-squares answer from it, either steered clear of obstacles (see :meth:`_steered`:
+        only the answer taken is). Solved afresh, a solver whose answers swing the whole
         chain (FABRIK) can answer a pose far from one whose end is within pixels of the target,
         and the chain would whip through the target again on its way there."""
-        solution = self._solve(pose, target)
         start = self._wrapped(pose)
-        if _largest(solution.angles - start) <= NEAR:
-            return solution
-        local = solve_dls(
-            self._skeleton,
-            start,
-            target,
-            max_iterations=FINISH_ITERATIONS * self.iterations,
-            tolerance=self.arrival,
+        solution = self.solver.solve(
+            start, target, max_iterations=self.iterations, tolerance=self.arrival
         )
-        if self.avoider is not None:
-            local = self.avoider.steer(start, local, target, self.arrival)
-        near = self._ik_rate is not None and _largest(local.angles - start) <= NEAR
-        self._fresh = _Fresh(local, local.angles) if near else None
-        return local
+        if _largest(solution.angles - start) > NEAR:
+            solution = solve_dls(
+                self._skeleton,
+                start,
+                target,
+                max_iterations=FINISH_ITERATIONS * self.iterations,
+                tolerance=self.arrival,
+            )
+        return self._steered(start, solution, target)
 
     def _weightless_way(self) -> bool:
         """True for a chain of up to :data:`~ikgame.control.servo.SECTION_LINKS` links without
@@ -653,11 +651,17 @@ class Controller:
         return strain(goal) <= STRAINED and holds_along(strain, goal - error, error)
 
     def _solve(self, measured: np.ndarray, target: np.ndarray | TargetSet) -> Solution:
-        """The solver's answer from the ``measured`` pose, steered clear of obstacles; an
-        answer that arrives is kept to be driven toward until the next solve."""
+        """The solver's answer from the ``measured`` pose (see :meth:`_steered`)."""
         start = self._wrapped(measured)
         solve = self.solver.solve_targets if isinstance(target, TargetSet) else self.solver.solve
         solution = solve(start, target, max_iterations=self.iterations, tolerance=self.arrival)
+        return self._steered(start, solution, target)
+
+    def _steered(
+        self, start: np.ndarray, solution: Solution, target: np.ndarray | TargetSet
+    ) -> Solution:
+        """The answer ``solution`` from the pose ``start``, steered clear of obstacles; one
+        that arrives is kept to be driven toward until the next solve."""
         avoider = self.avoider
         if avoider is not None:
             solution = avoider.steer(start, solution, target, self.arrival)

@@ -190,14 +190,11 @@ class Servo:
         if self._floats is not None:
             pose = self._floats.pose(world_angles)
             pull = (float(gravity[0]), float(gravity[1]))
-            hold, inertia = pose.loads(gravity=pull)[0], pose.inertia()
+            hold, inertia = np.array(pose.loads(gravity=pull)[0]), np.array(pose.inertia())
         else:
             pose = Pose(self.inertia, world_angles)
             hold, inertia = pose.loads(gravity=gravity).torques, pose.inertia()
-        # Braking a joint turning up (positive) takes torque down: its load helps or eats in.
-        against = np.where(velocities > 0.0, self.max_torque + hold, self.max_torque - hold)
-        floor = BRAKE_FLOOR * self.max_torque
-        return BRAKE_SHARE * np.maximum(against, floor) / inertia
+        return _capacities(self.max_torque, hold, inertia, velocities > 0.0)[3]
 
     def most_strain(self, gravity: tuple[float, float]) -> float:
         """A bound on :meth:`strain` over every pose, from one pass over the links: each
@@ -309,16 +306,7 @@ class Servo:
         pose = Pose(self.inertia, world_angles)
         hold = pose.loads(gravity=gravity)
         inertia = pose.inertia()
-        # What each joint can change its velocity by, per second, either way: its load eats
-        # into the torque on one side and adds to it on the other (gravity helps a lowering).
-        up = np.maximum(self.max_torque - hold.torques, 0.0) / inertia
-        down = np.maximum(self.max_torque + hold.torques, 0.0) / inertia
-        # Braking toward the goal takes the other side's capacity. A joint held at its torque
-        # limit has none there at this pose, yet moving on changes its load; it plans with a
-        # floor so that it moves at all rather than stay where its torque ran out.
-        against = np.where(error > 0.0, down, up)
-        floor = BRAKE_FLOOR * self.max_torque / inertia
-        brake = BRAKE_SHARE * np.maximum(against, floor)
+        up, down, floor, brake = _capacities(self.max_torque, hold.torques, inertia, error > 0.0)
         # A joint gravity overloads has no capacity toward its goal at this pose by that count,
         # yet the others' motion can lend it some (their reaction on it): it asks for as much
         # as its limit and the load could give either way, and gives way at its limit where
@@ -624,6 +612,23 @@ class Servo:
             forces=np.array((loads[1], loads[2])).T,
             budgets=np.array(budgets),
         )
+
+
+def _capacities(
+    max_torque: np.ndarray, hold: np.ndarray, inertia: np.ndarray, positive: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """What each joint can change its velocity by, per second (rad/s^2): up and down, its
+    braking floor, and its braking when it turns the ``positive`` way (True) or the other, from
+    its torque limit and the load it ``hold``s, over its ``inertia``."""
+    # Its load eats into the torque on one side and adds to it on the other (gravity helps a
+    # lowering).
+    up = np.maximum(max_torque - hold, 0.0) / inertia
+    down = np.maximum(max_torque + hold, 0.0) / inertia
+    # Braking takes the other side's capacity. A joint held at its torque limit has none there
+    # at this pose, yet moving on changes its load; it plans with a floor so that it moves at
+    # all rather than stay where its torque ran out.
+    floor = BRAKE_FLOOR * max_torque / inertia
+    return up, down, floor, BRAKE_SHARE * np.maximum(np.where(positive, down, up), floor)
 
 
 def _stopping(errors: list[float], closing: list[float]) -> tuple[float, float]:
