@@ -715,7 +715,9 @@ def _paced(
     torque to hold its load here (``held``, the static loads; ``limits``, the torque limits)
     but not the load the others would put on it, running on ahead toward their goals while
     it stays (``loads_at(turns)``: the static loads with the joints turned so much, radians,
-    checked at :data:`PACE_STEPS` of the way).
+    checked at :data:`PACE_STEPS` of the way); or where, its load leaving it at least its
+    braking floor (:data:`BRAKE_FLOOR`) to come with, a joint beyond it that holds its own
+    load here would not hold it there.
 
     Waiting for the joint whose torque holding the arm nearly spends keeps the chain on the
     straight line in joint space the motors were checked to hold along: an arm lifted over
@@ -727,6 +729,13 @@ def _paced(
     five weak links of `29_five_weak_links` took 2.6 s to swing up for their second target,
     and missed it.
 
+    The joints beyond it running on ahead can also overload themselves: an arm swinging its
+    weak wrist over the top (`80_heavy_weak_three_swing_over`) whose elbow, near its limit,
+    lagged while the wrist turned in at its own speed tipped the wrist's link past the load
+    its motor holds (1.19 of it), and the link fell onto its stop. Its pacer's load leaving
+    it less than its braking floor, though, it has next to nothing to come with, and the
+    waiting arm sags (29 again).
+
     >>> lever = lambda turns: [1.0 + turns[1], 0.0]  # the far joint turning on loads the base
     >>> rest = ([0.1, 3.0], [1.0, 0.0], [1.5, 1.0], lever)  # reach, held, limits, loads_at
     >>> _paced([1.0, 1.0], [2.0, 2.0], [0.0, 0.0], *rest)
@@ -734,6 +743,12 @@ def _paced(
     >>> _paced([1.0, -1.0], [2.0, -2.0], [0.0, 0.0], *rest) is None  # it turns the other way
     True
     >>> _paced([1.0, 1.0], [2.0, 2.0], [-0.5, 0.0], *rest) is None  # the base carried away
+    True
+    >>> tipping = lambda turns: [0.5, 0.5 + turns[1]]  # the far joint tips over on its own
+    >>> _paced([1.0, 1.0], [2.0, 2.0], [0.0, 0.0], [0.1, 3.0], [0.5, 0.5], [1.5, 1.0], tipping)
+    [0.1, 3.0]
+    >>> spent = [1.4, 0.5]  # the base's load leaves it under its braking floor
+    >>> _paced([1.0, 1.0], [2.0, 2.0], [0.0, 0.0], [0.1, 3.0], spent, [1.5, 1.0], tipping) is None
     True
     """
     longest, pacer, own = 0.0, -1, 0.0
@@ -751,8 +766,14 @@ def _paced(
     if side * velocities[pacer] < 0.0 or side * held[pacer] > limit:
         return None
     others = [0.0 if index == pacer else e for index, e in enumerate(errors)]
+    # A chain's joints beyond the pacer come after it (a servo brings a chain in together).
+    beyond = range(pacer + 1, len(errors))
+    room = side * held[pacer] <= (1.0 - BRAKE_FLOOR) * limit
     for step in PACE_STEPS:
-        if side * loads_at([step * e for e in others])[pacer] > limit:
+        loads = loads_at([step * e for e in others])
+        if side * loads[pacer] > limit:
+            return reach
+        if room and any(abs(loads[k]) > limits[k] >= abs(held[k]) for k in beyond):
             return reach
     return None
 

@@ -301,6 +301,17 @@ def test_a_goal_the_motors_hold_only_just_is_come_in_to_together(solver, stress_
     assert sim.last_tick.solver_status == "success"
 
 
+def test_a_weak_wrist_waits_for_a_lagging_elbow_rather_than_tip_over(stress_simulation):
+    # Three links in heavy gravity swinging from side to side over the top, CCD. For the fourth
+    # target the elbow, near its torque limit, lagged while the light wrist turned in at its
+    # own speed: the wrist's link tipped past what its motor holds (1.19 of it), fell onto its
+    # stop, and the arm lay there `blocked` 89 px off. Coming in together, the wrist now waits.
+    sim = stress_simulation("80_heavy_weak_three_swing_over", "ccd")
+    while sim.script.step_index < 4:
+        sim.step()
+    assert [outcome.reached for outcome in sim.script.outcomes] == [True] * 4
+
+
 def test_under_a_ceiling_the_avoider_sends_weak_links_to_a_clear_pose_they_hold(stress_simulation):
     # Six weakening links hanging under a ceiling, JT. The solver's answers ask up to 0.95 of
     # the motors, but the clear answers the avoider put in their place asked 1.02 and 1.09:
