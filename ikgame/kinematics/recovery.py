@@ -182,8 +182,9 @@ HELD_STEPS: Final = 100
 :func:`held_nearest`)."""
 
 SPENT: Final = 0.9
-"""Share of some motor's torque limit that holding the chain where it is takes, past which a
-solve looks for an answer whose way the motors hold (see :meth:`RobustSolver.solve`)."""
+"""Share of some motor's torque limit that holding the chain where a target found it takes,
+past which a solve looks for an answer whose way the motors hold (see
+:meth:`RobustSolver.solve`)."""
 
 NEAREST_STRAINS: Final = 100
 """How many times one call of :meth:`RobustSolver.solve` asks the strain of poses on the way
@@ -373,6 +374,10 @@ class RobustSolver:
         self._pending: _Goal | None = None
         self._waiting = 0
         self._moves = 0  # calls in a row with a goal other than the call before's
+        # The measured pose at the first call for the goal, where the chain set off from, and
+        # (once asked) whether holding it there spent the motors (see _held_answer).
+        self._set_off: list[float] = []
+        self._spent: bool | None = None
         self._unheld: _Goal | None = None
         # The target whose search for an answer with a way the motors hold found none.
         self._way_searched: _Goal | None = None
@@ -404,7 +409,7 @@ class RobustSolver:
         )
         if cached is not None:
             return cached
-        self._count_calls(goal)
+        self._count_calls(goal, measured)
         stretched = self._stretched(goal, tol)
         if stretched is not None:
             return self._keep(stretched, goal, followed=False)
@@ -507,7 +512,7 @@ class RobustSolver:
         cached = self._cached(measured, goal, tol, measure)
         if cached is not None:
             return cached
-        self._count_calls(goal)
+        self._count_calls(goal, measured)
         start = np.array(measured)
         plain = self._solve_targets(
             skeleton, start, targets, max_iterations=max_iterations, tolerance=tol
@@ -542,15 +547,16 @@ class RobustSolver:
         )
         return self._approached(measured, recovered)
 
-    def _count_calls(self, goal: _Goal) -> None:
+    def _count_calls(self, goal: _Goal, measured: list[float]) -> None:
         """Count the calls in a row with one and the same goal, and those in a row with a
-        new one each."""
+        new one each; note the ``measured`` pose (radians) a new goal finds the chain in."""
         if goal == self._pending:
             self._waiting += 1
             self._moves = 0
         else:
             self._pending, self._waiting = goal, 0
             self._moves += 1
+            self._set_off, self._spent = measured, None
 
     def _cached(
         self,
@@ -763,7 +769,9 @@ class RobustSolver:
         if goal == self._way_searched:
             return None
         unsafe = self.most_strain > STRAINED and not way(STRAINED)(plain.angles)
-        if unsafe or (strain(start) > SPENT and not way(HOLDS)(plain.angles)):
+        if self._spent is None:
+            self._spent = strain(np.array(self._set_off)) > SPENT
+        if unsafe or (self._spent and not way(HOLDS)(plain.angles)):
             # An answer the motors hold at rest but not on the way to it with the margin they
             # rest with (HOLDS): from the pose where a torque-bound target left
             # `46_heavy_weak_second_branch` (its base at 0.95 of its limit), CCD's and FABRIK's
@@ -774,7 +782,11 @@ class RobustSolver:
             # unless it leaves them less than the margin at rest (see _held_way). From any
             # rest, so is one whose way asks more than the motors have (``unsafe``): the
             # upright arm of `80_heavy_weak_three_swing_over`, leaning toward CCD's answer
-            # (0.97 at rest, 1.19 on the way), fell past the target onto the floor.
+            # (0.97 at rest, 1.19 on the way), fell past the target onto the floor. Spent
+            # where the target found the chain, not where it passes on its way: 80's FABRIK
+            # arm, 16 px from its third target and closing, passed a pose asking 0.90, and the
+            # answer found from there, the elbow bent the other way, whipped it through the
+            # target and down onto the floor (91.6% past).
             search, iterations = self._searched(plain, target, tol, seeds(), holds, way(HOLDS))
             if search.origin is None:
                 search.origin = skeleton.clamp(start)

@@ -312,6 +312,17 @@ def test_a_weak_wrist_waits_for_a_lagging_elbow_rather_than_tip_over(stress_simu
     assert [outcome.reached for outcome in sim.script.outcomes] == [True] * 4
 
 
+def test_a_weak_arm_keeps_its_answer_through_a_spent_pose_on_its_way(stress_simulation):
+    # FABRIK, 80's third target: 16 px from it and closing, the arm passed a pose holding
+    # which asks 0.90 of a motor, and the search for an answer whose way the motors hold,
+    # meant for a chain a target finds at such a rest, swapped in the elbow's other branch:
+    # the arm whipped through the target onto the floor (91.6% past) and lay there blocked.
+    sim = stress_simulation("80_heavy_weak_three_swing_over", "fabrik")
+    while sim.script.step_index < 3:
+        sim.step()
+    assert [outcome.reached for outcome in sim.script.outcomes] == [True] * 3
+
+
 def test_under_a_ceiling_the_avoider_sends_weak_links_to_a_clear_pose_they_hold(stress_simulation):
     # Six weakening links hanging under a ceiling, JT. The solver's answers ask up to 0.95 of
     # the motors, but the clear answers the avoider put in their place asked 1.02 and 1.09:
