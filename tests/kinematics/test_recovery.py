@@ -660,6 +660,44 @@ def test_an_answer_the_motors_cannot_hold_sends_the_solver_to_one_they_can(name)
     assert sol.angles[1] < 0.0
 
 
+@pytest.mark.parametrize("name", NAMES)
+def test_an_answer_at_the_edge_of_what_the_motors_hold_gives_way_to_one_with_margin(name):
+    # The base turned below level asks 0.98 of the motors: within what they hold, past the
+    # margin they rest with; the pose the target finds the arm in asks half. Every solver's
+    # plain answer keeps the elbow's bend and lowers the base: the restarts find the other
+    # bend, the base raised, which asks half.
+    arm = Skeleton.chain([100.0, 100.0])
+    robust = RobustSolver(arm, name)
+    edge = (HOLDS + STRAINED) / 2.0
+    robust.strain = lambda angles: edge if angles[0] < 0.0 else 0.5
+    pose, target = np.array([0.3, 0.8]), np.array([120.0, 60.0])
+    plain = SOLVERS[name](arm, pose, target, max_iterations=50, tolerance=TOLERANCE)
+    assert plain.angles[0] < 0.0
+    for _ in range(2 * STILL_CALLS + 10):
+        sol = robust.solve(pose, target, max_iterations=10, tolerance=TOLERANCE)
+    assert sol.status is SolveStatus.SUCCESS and sol.error <= TOLERANCE
+    assert sol.angles[0] > 0.0
+
+
+def test_an_answer_at_the_edge_stands_where_none_with_margin_reaches_the_target():
+    # Every pose reaching out past 150 px asks 0.98 of the motors, so none with the margin
+    # reaches the target at 168 px from the folded arm: the plain answer, which they hold,
+    # stands (not the held pose nearest the target, short of it), and the search is not
+    # begun again.
+    arm = Skeleton.chain([100.0, 100.0])
+    robust = RobustSolver(arm, "dls")
+    edge = (HOLDS + STRAINED) / 2.0
+    robust.strain = lambda angles: edge if np.hypot(*_end(arm, angles)) > 150.0 else 0.5
+    pose, target = np.array([0.3, 2.0]), np.array([150.0, 75.0])
+    plain = RobustSolver(arm, "dls")
+    calls = [robust.solve(pose, target, max_iterations=10, tolerance=TOLERANCE) for _ in range(60)]
+    alone = plain.solve(pose, target, max_iterations=10, tolerance=TOLERANCE)
+    assert max(sol.iterations for sol in calls[:10]) > alone.iterations  # it searched
+    assert all(sol.status is SolveStatus.SUCCESS for sol in calls)
+    assert all(sol.error <= TOLERANCE for sol in calls)
+    assert calls[-1].iterations == alone.iterations  # and then gave up searching
+
+
 def test_when_no_pose_can_be_held_the_plain_answer_serves_without_searching_again():
     arm = Skeleton.chain([100.0, 100.0])
     robust = RobustSolver(arm, "dls")
