@@ -756,7 +756,9 @@ class RobustSolver:
             # as the chain moves, would start and drop the search by turns.
             self._edge = strain(plain.angles) > HOLDS
         unheld = strain(plain.angles) > STRAINED
-        if goal != self._unheld and (unheld or self._edge):
+        unsafe = self.most_strain > STRAINED and not way(STRAINED)(plain.angles)
+        # An answer at the edge whose way asks more than the motors have waits below instead.
+        if goal != self._unheld and (unheld or (self._edge and not unsafe)):
             # Still on its way too: a solver that takes many calls to arrive (CCD) would
             # otherwise bring the end to the target in a pose the motors cannot hold, and the
             # switch to one they can would carry it away again. Only for a target that holds
@@ -785,7 +787,6 @@ class RobustSolver:
             )
         if goal == self._way_searched:
             return None
-        unsafe = self.most_strain > STRAINED and not way(STRAINED)(plain.angles)
         if self._spent is None:
             self._spent = strain(np.array(self._set_off)) > SPENT
         if unsafe or (self._spent and not way(HOLDS)(plain.angles)):
