@@ -376,7 +376,8 @@ class RobustSolver:
         self._waiting = 0
         self._moves = 0  # calls in a row with a goal other than the call before's
         # The measured pose at the first call for the goal, where the chain set off from, and
-        # (once asked) whether holding it there spent the motors (see _held_answer).
+        # (once asked) whether holding it there spent the motors and whether the plain answer
+        # the goal found asked more than the margin they rest with (see _held_answer).
         self._set_off: list[float] = []
         self._spent: bool | None = None
         self._edge: bool | None = None
@@ -755,10 +756,10 @@ class RobustSolver:
             # Asked once a goal: the plain answer's strain, crossing HOLDS from call to call
             # as the chain moves, would start and drop the search by turns.
             self._edge = strain(plain.angles) > HOLDS
-        unheld = strain(plain.angles) > STRAINED
+        strained = strain(plain.angles) > STRAINED
         unsafe = self.most_strain > STRAINED and not way(STRAINED)(plain.angles)
         # An answer at the edge whose way asks more than the motors have waits below instead.
-        if goal != self._unheld and (unheld or (self._edge and not unsafe)):
+        if goal != self._unheld and (strained or (self._edge and not unsafe)):
             # Still on its way too: a solver that takes many calls to arrive (CCD) would
             # otherwise bring the end to the target in a pose the motors cannot hold, and the
             # switch to one they can would carry it away again. Only for a target that holds
@@ -767,7 +768,7 @@ class RobustSolver:
             # the margin they rest with (HOLDS): `61_heavy_gravity_weak_motors`' base, asked
             # 0.98 of its torque by DLS's answer for the fourth target, let the arm sag off it.
             search, iterations = self._searched(plain, target, tol, seeds(), holds, way(STRAINED))
-            if not unheld and not search.arrived:
+            if not strained and not search.arrived:
                 # Until one with the margin arrives, and if none does, the plain answer: the
                 # motors hold it all the same.
                 if not search.exhausted:
