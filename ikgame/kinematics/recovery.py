@@ -752,11 +752,12 @@ class RobustSolver:
                 strain, start, _short_way(skeleton, angles - start), most
             )
 
+        asks = strain(plain.angles)
         if self._edge is None:
             # Asked once a goal: the plain answer's strain, crossing HOLDS from call to call
             # as the chain moves, would start and drop the search by turns.
-            self._edge = strain(plain.angles) > HOLDS
-        strained = strain(plain.angles) > STRAINED
+            self._edge = asks > HOLDS
+        strained = asks > STRAINED
         unsafe = self.most_strain > STRAINED and not way(STRAINED)(plain.angles)
         # An answer at the edge whose way asks more than the motors have waits below instead.
         if goal != self._unheld and (strained or (self._edge and not unsafe)):
