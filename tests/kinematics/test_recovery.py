@@ -662,7 +662,7 @@ def test_an_answer_the_motors_cannot_hold_sends_the_solver_to_one_they_can(name)
 
 @pytest.mark.parametrize("name", NAMES)
 def test_an_answer_at_the_edge_of_what_the_motors_hold_gives_way_to_one_with_margin(name):
-    # The base turned below level asks 0.98 of the motors: within what they hold, past the
+    # The base turned below level asks 0.975 of the motors: within what they hold, past the
     # margin they rest with; the pose the target finds the arm in asks half. Every solver's
     # plain answer keeps the elbow's bend and lowers the base: the restarts find the other
     # bend, the base raised, which asks half.
@@ -680,7 +680,7 @@ def test_an_answer_at_the_edge_of_what_the_motors_hold_gives_way_to_one_with_mar
 
 
 def test_an_answer_at_the_edge_stands_where_none_with_margin_reaches_the_target():
-    # Every pose reaching out past 150 px asks 0.98 of the motors, so none with the margin
+    # Every pose reaching out past 150 px asks 0.975 of the motors, so none with the margin
     # reaches the target at 168 px from the folded arm: the plain answer, which they hold,
     # stands (not the held pose nearest the target, short of it), and the search is not
     # begun again.
