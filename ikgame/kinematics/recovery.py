@@ -758,8 +758,15 @@ class RobustSolver:
             # as the chain moves, would start and drop the search by turns.
             self._edge = asks > HOLDS
         strained = asks > STRAINED
-        unsafe = self.most_strain > STRAINED and not way(STRAINED)(plain.angles)
-        # An answer at the edge whose way asks more than the motors have waits below instead.
+
+        def way_unsafe() -> bool:
+            return self.most_strain > STRAINED and not way(STRAINED)(plain.angles)
+
+        # Asked only where it decides something (its poses' strains, on every call).
+        unsafe = None
+        if goal != self._unheld and not strained and self._edge:
+            # An answer at the edge whose way asks more than the motors have waits below.
+            unsafe = way_unsafe()
         if goal != self._unheld and (strained or (self._edge and not unsafe)):
             # Still on its way too: a solver that takes many calls to arrive (CCD) would
             # otherwise bring the end to the target in a pose the motors cannot hold, and the
@@ -791,6 +798,8 @@ class RobustSolver:
             return None
         if self._spent is None:
             self._spent = strain(np.array(self._set_off)) > SPENT
+        if unsafe is None:
+            unsafe = way_unsafe()
         if unsafe or (self._spent and not way(HOLDS)(plain.angles)):
             # An answer the motors hold at rest but not on the way to it with the margin they
             # rest with (HOLDS): from the pose where a torque-bound target left
