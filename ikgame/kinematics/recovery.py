@@ -53,9 +53,10 @@ for ``STILL_CALLS`` calls, the same restarts (with
 ``HOLD_SEEDS`` random poses, then the answer slid along the poses that keep the end on the
 target toward one the motors hold), in which only an arrival within ``HOLDS`` counts. The first
 one the chain can get to through poses the motors hold (every pose checked on the straight line
-in joint space from the chain's, :func:`holds_along`) is followed like a far seed's answer; the
-first that the motors hold only at rest is served while the search goes on, and followed once
-every seed has been tried. Until one is found the plain answer serves; once every seed has
+in joint space from the chain's, :func:`holds_along`) and that leaves them room to brake (within
+``SPENT``) is followed like a far seed's answer; the first that leaves them less room, or that
+they hold only at rest, is served while the search goes on, and followed once every seed has
+been tried. Until one is found the plain answer serves; once every seed has
 failed, the target asks more than the motors have, and the answer is the pose nearest it that
 they hold (:func:`held_nearest`), a ``FAILURE`` cached as a target out of reach is.
 
@@ -185,7 +186,8 @@ HELD_STEPS: Final = 100
 SPENT: Final = 0.9
 """Share of some motor's torque limit that holding the chain where a target found it takes,
 past which a solve looks for an answer whose way the motors hold (see
-:meth:`RobustSolver.solve`)."""
+:meth:`RobustSolver.solve`). A search for an answer the motors hold prefers one within it too:
+such a rest leaves them room to brake on the way in and to set off from."""
 
 NEAREST_STRAINS: Final = 100
 """How many times one call of :meth:`RobustSolver.solve` asks the strain of poses on the way
@@ -747,6 +749,9 @@ class RobustSolver:
         def holds(angles: np.ndarray) -> bool:
             return strain(angles) <= HOLDS
 
+        def roomy(angles: np.ndarray) -> bool:
+            return strain(angles) <= SPENT
+
         def way(most: float) -> Callable[[np.ndarray], bool]:
             return lambda angles: holds_along(
                 strain, start, _short_way(skeleton, angles - start), most
@@ -775,10 +780,17 @@ class RobustSolver:
             # So too where the target found the answer at the edge of what they hold, past
             # the margin they rest with (HOLDS): `61_heavy_gravity_weak_motors`' base, asked
             # 0.98 of its torque by DLS's answer for the fourth target, let the arm sag off it.
-            search, iterations = self._searched(plain, target, tol, seeds(), holds, way(STRAINED))
+            search, iterations = self._searched(
+                plain, target, tol, seeds(), holds, way(STRAINED), roomy
+            )
             if not strained and not search.arrived:
-                # Until one with the margin arrives, and if none does, the plain answer: the
-                # motors hold it all the same.
+                # Until one with room to brake arrives, the first with the margin, and where
+                # none has the margin, the plain answer: the motors hold it all the same.
+                if search.tight is not None:
+                    answer = self._arrival(search.tight, target, iterations)
+                    if not search.exhausted:
+                        return answer
+                    return self._keep(answer, goal, followed=True)
                 if not search.exhausted:
                     return replace(plain, iterations=iterations)
                 self._unheld, self._search = goal, None
@@ -816,7 +828,9 @@ class RobustSolver:
             # arm, 16 px from its third target and closing, passed a pose asking 0.90, and the
             # answer found from there, the elbow bent the other way, whipped it through the
             # target and down onto the floor (91.6% past).
-            search, iterations = self._searched(plain, target, tol, seeds(), holds, way(HOLDS))
+            search, iterations = self._searched(
+                plain, target, tol, seeds(), holds, way(HOLDS), roomy
+            )
             if search.origin is None:
                 search.origin = skeleton.clamp(start)
             wait = search.origin if unsafe else None
@@ -835,9 +849,17 @@ class RobustSolver:
     ) -> Solution:
         """After a plain solve that arrives in a pose the motors cannot hold, the ``search``:
         restarts from the seeds of a stall, in which only arrivals they can hold count. The first
-        the chain can get to through poses they hold wins and is followed. The first they
-        hold only at rest is served while the search goes on, and followed once it has tried
-        every seed; with none, the plain answer serves meanwhile.
+        the chain can get to through poses they hold, with room to brake on the way in
+        (within :data:`SPENT`), wins and is followed. The first with less room, else the
+        first they hold only at rest, is served while the search goes on, and followed once
+        it has tried every seed; with none, the plain answer serves meanwhile.
+
+        The room is what stops the chain on its answer: on `81_heavy_weak_five_swing_over`
+        DLS's first arrival for the first target asked 0.93 of some motor at rest; the elbow,
+        holding 0.90 to 0.95 of its torque as it lowered the arm, had 5% of it to brake with,
+        passed its goal at 51 deg/s and stopped 11 deg beyond it, and the last link, its motor
+        at its limit, fell onto its stop (`blocked` 48 px off). A later seed's answer asks 0.83,
+        and the arm reaches all six targets.
 
         An answer found so can lie far from the chain in joint space, and the way there matters
         as much as the answer: on `40_seven_weak_links_hanging` FABRIK's first arrival for the
@@ -859,16 +881,14 @@ class RobustSolver:
         of `29_five_weak_links` moved their end 3 to 4 px in the last half second of the
         torque-bound target's hold."""
         found = search.best if search.arrived else None
+        meanwhile = search.fallback if search.tight is None else search.tight
         if found is None and search.exhausted:
-            found = search.fallback
+            found = meanwhile
         if found is not None:
-            error = _error(self._skeleton, found, target)
-            answer = Solution(found, SolveStatus.SUCCESS, iterations, error)
-            return self._keep(answer, goal, followed=True)
-        if search.fallback is not None:
+            return self._keep(self._arrival(found, target, iterations), goal, followed=True)
+        if meanwhile is not None:
             # Not kept: the search goes on at the next call.
-            error = _error(self._skeleton, search.fallback, target)
-            return Solution(search.fallback, SolveStatus.SUCCESS, iterations, error)
+            return self._arrival(meanwhile, target, iterations)
         if search.exhausted:
             if search.nearest is None:
                 search.nearest = nearest()
@@ -895,12 +915,13 @@ class RobustSolver:
         seeds: tuple[_Seeds, _Seeds],
         holds: Callable[[np.ndarray], bool],
         way: Callable[[np.ndarray], bool],
+        roomy: Callable[[np.ndarray], bool],
     ) -> tuple[_Search, int]:
         """The search for arrivals the motors hold (``holds``), through poses they hold
         (``way``), taken on by this call's budget; and the iterations of ``plain`` and of it."""
         search = self._search
         if search is None or search.accept is None or not search.aims_at(target, tol):
-            search = self._search = _Search(*seeds, target, tol, holds, way)
+            search = self._search = _Search(*seeds, target, tol, holds, way, roomy)
         search.far = True
         used = search.run(self._skeleton, target, tol, self.budget)
         return search, plain.iterations + used
@@ -915,8 +936,10 @@ class RobustSolver:
         wait: np.ndarray | None,
     ) -> Solution | None:
         """After a plain solve whose answer the motors hold (or one on its way) but not the
-        way to it, the ``search`` for an arrival they hold through poses they hold: it replaces
-        the plain answer. The plain answer serves while the search goes on, unless its way
+        way to it, the ``search`` for an arrival they hold through poses they hold, with room
+        to brake (within :data:`SPENT`): it replaces the plain answer. The first such arrival
+        with less room serves while the search goes on and is followed once it has tried
+        every seed; without one the plain answer serves meanwhile, unless its way
         asks more than the motors have somewhere: then the pose to ``wait`` in does (where the
         search began, and the ways it finds start), ``processing``; once it has tried
         every seed, None (the plain answer is taken as any other), but where the motors do not
@@ -932,10 +955,14 @@ class RobustSolver:
         the arrival this search had found on the fifth call; served then, the arm reaches
         the target 0.7 s sooner.
         """
-        if search.arrived:
-            error = _error(self._skeleton, search.best, target)
-            answer = Solution(search.best, SolveStatus.SUCCESS, iterations, error)
-            return self._keep(answer, goal, followed=True)
+        found = search.best if search.arrived else None
+        if found is None and search.exhausted:
+            found = search.tight
+        if found is not None:
+            return self._keep(self._arrival(found, target, iterations), goal, followed=True)
+        if search.tight is not None:
+            # Not kept: the search goes on at the next call.
+            return self._arrival(search.tight, target, iterations)
         if not search.exhausted:
             if wait is not None:
                 # The chain stays where the search began rather than set off on a way the
@@ -948,9 +975,13 @@ class RobustSolver:
         strain = self.strain
         if search.fallback is None or strain is None or strain(plain.angles) <= HOLDS:
             return None
-        error = _error(self._skeleton, search.fallback, target)
-        answer = Solution(search.fallback, SolveStatus.SUCCESS, iterations, error)
+        answer = self._arrival(search.fallback, target, iterations)
         return self._keep(answer, goal, followed=True)
+
+    def _arrival(self, angles: np.ndarray, target: np.ndarray, iterations: int) -> Solution:
+        """A search's arrival at ``target`` (px), ``angles`` (radians), as an answer."""
+        error = _error(self._skeleton, angles, target)
+        return Solution(angles, SolveStatus.SUCCESS, iterations, error)
 
     def _keep(self, solution: Solution, goal: _Goal, followed: bool) -> Solution:
         """Cache ``solution`` (an arrival, or the best there is) and return it read-only."""
@@ -995,6 +1026,7 @@ class _Search:
         tolerance: float,
         accept: Callable[[np.ndarray], bool] | None = None,
         prefer: Callable[[np.ndarray], bool] | None = None,
+        roomy: Callable[[np.ndarray], bool] | None = None,
     ) -> None:
         self.target = target.copy() if isinstance(target, np.ndarray) else target
         self.tolerance = tolerance
@@ -1003,8 +1035,13 @@ class _Search:
         self.prefer = prefer
         """Whether an arrival that counts ends the search (the chain gets there through poses
         the motors hold, say); None: every one does."""
+        self.roomy = roomy
+        """Whether a preferred arrival leaves the motors room to brake (see ``SPENT``); None:
+        every one does."""
         self.fallback: np.ndarray | None = None
         """The first arrival that counts but does not end the search, if any."""
+        self.tight: np.ndarray | None = None
+        """The first preferred arrival without that room, if any."""
         self.origin: np.ndarray | None = None
         """The pose (radians) the chain was in when the search began, where its ways start."""
         self.nearest: Generator[int, None, np.ndarray | None] | None = None
@@ -1089,9 +1126,21 @@ class _Search:
                     and self.prefer is not None
                     and not self.prefer(sol.angles)
                 ):
-                    if self.fallback is None:
+                    if self.fallback is None or (
+                        self.roomy is not None
+                        and not self.roomy(self.fallback)
+                        and self.roomy(sol.angles)
+                    ):
                         self.fallback = sol.angles
                     break  # it counts, but a better one may follow: the next seed
+                if (
+                    sol.status is SolveStatus.SUCCESS
+                    and self.roomy is not None
+                    and not self.roomy(sol.angles)
+                ):
+                    if self.tight is None:
+                        self.tight = sol.angles
+                    break
                 score = self.score(sol)
                 if score < self._best_score or sol.status is SolveStatus.SUCCESS:
                     self.best, self.best_far = sol.angles, far

@@ -28,6 +28,7 @@ from ikgame.kinematics.recovery import (
     OFF_STOPS,
     RESTART_BUDGET,
     SETTLED,
+    SPENT,
     STILL_CALLS,
     STRAINED,
     held_nearest,
@@ -696,6 +697,47 @@ def test_an_answer_at_the_edge_stands_where_none_with_margin_reaches_the_target(
     assert all(sol.status is SolveStatus.SUCCESS for sol in calls)
     assert all(sol.error <= TOLERANCE for sol in calls)
     assert calls[-1].iterations == alone.iterations  # and then gave up searching
+
+
+def _three_link_room(tight_everywhere: bool):
+    """A three-link arm, a target, and a stand-in strain: the elbow bent the positive way (the
+    plain answers' bend) asks twice what the motors have, the other bend leaves them no room to
+    brake (between ``SPENT`` and ``HOLDS``) unless the base is raised past 1 rad (half)."""
+    arm = Skeleton.chain([100.0, 100.0, 100.0])
+    tight = (SPENT + HOLDS) / 2.0
+
+    def strain(angles: np.ndarray) -> float:
+        if angles[1] > 0.0:
+            return 2.0
+        return 0.5 if angles[0] > 1.0 and not tight_everywhere else tight
+
+    return arm, strain, tight, np.array([0.3, 0.8, 0.3]), np.array([150.0, 100.0])
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_a_search_prefers_an_answer_that_leaves_the_motors_room_to_brake(name):
+    arm, strain, _, pose, target = _three_link_room(tight_everywhere=False)
+    robust = RobustSolver(arm, name)
+    robust.strain = strain
+    assert strain(SOLVERS[name](arm, pose, target, max_iterations=50).angles) > STRAINED
+    for _ in range(2 * STILL_CALLS + 30):
+        sol = robust.solve(pose, target, max_iterations=10, tolerance=TOLERANCE)
+    assert sol.status is SolveStatus.SUCCESS and sol.error <= TOLERANCE
+    assert strain(sol.angles) <= SPENT
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_an_answer_without_room_to_brake_is_taken_where_none_has_it(name):
+    arm, strain, tight, pose, target = _three_link_room(tight_everywhere=True)
+    robust = RobustSolver(arm, name)
+    robust.strain = strain
+    calls = [
+        robust.solve(pose, target, max_iterations=10, tolerance=TOLERANCE)
+        for _ in range(2 * STILL_CALLS + 30)
+    ]
+    assert calls[-1].iterations == 0  # the search is over and its answer kept
+    assert calls[-1].status is SolveStatus.SUCCESS and calls[-1].error <= TOLERANCE
+    assert strain(calls[-1].angles) == tight
 
 
 def test_when_no_pose_can_be_held_the_plain_answer_serves_without_searching_again():
