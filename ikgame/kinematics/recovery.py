@@ -56,7 +56,7 @@ one the chain can get to through poses the motors hold (every pose checked on th
 in joint space from the chain's, :func:`holds_along`) and that leaves them room to brake (within
 ``SPENT``) is followed like a far seed's answer; the first that leaves them less room, or that
 they hold only at rest, is served while the search goes on, and followed once every seed has
-been tried. Until one is found the plain answer serves; once every seed has
+been tried. Until one is found the chain waits where the search began; once every seed has
 failed, the target asks more than the motors have, and the answer is the pose nearest it that
 they hold (:func:`held_nearest`), a ``FAILURE`` cached as a target out of reach is.
 
@@ -802,6 +802,7 @@ class RobustSolver:
                 tol,
                 search,
                 iterations,
+                skeleton.clamp(start),
                 lambda: _held_nearest_steps(
                     skeleton, (skeleton.clamp(start), plain.angles), target, strain, slope
                 ),
@@ -845,6 +846,7 @@ class RobustSolver:
         tol: float,
         search: _Search,
         iterations: int,
+        start: np.ndarray,
         nearest: Callable[[], Generator[int, None, np.ndarray | None]],
     ) -> Solution:
         """After a plain solve that arrives in a pose the motors cannot hold, the ``search``:
@@ -852,7 +854,13 @@ class RobustSolver:
         the chain can get to through poses they hold, with room to brake on the way in
         (within :data:`SPENT`), wins and is followed. The first with less room, else the
         first they hold only at rest, is served while the search goes on, and followed once
-        it has tried every seed; with none, the plain answer serves meanwhile.
+        it has tried every seed. With none, the chain waits where the search began (``start``
+        at its first call: that pose is the answer, ``processing``) rather than set off toward
+        a pose the motors cannot hold: on `57_heavy_weak_four`'s torque-bound second target
+        CCD's and JT's arms, leaning toward the plain answer while the search ran, sank onto
+        the floor, where no pose near them held and they could not get up for the next two
+        targets; waiting, they come to rest in the held pose nearest the target and reach the
+        next two.
 
         The room is what stops the chain on its answer: on `81_heavy_weak_five_swing_over`
         DLS's first arrival for the first target asked 0.93 of some motor at rest; the elbow,
@@ -889,22 +897,26 @@ class RobustSolver:
         if meanwhile is not None:
             # Not kept: the search goes on at the next call.
             return self._arrival(meanwhile, target, iterations)
-        if search.exhausted:
-            if search.nearest is None:
-                search.nearest = nearest()
-            try:
-                spent = 0
-                while spent < NEAREST_STRAINS:
-                    spent += next(search.nearest)
-            except StopIteration as done:
-                self._unheld = goal
-                self._search = None
-                if done.value is not None:
-                    angles = done.value
-                    error = _error(self._skeleton, angles, target)
-                    status = SolveStatus.SUCCESS if error <= tol else SolveStatus.FAILURE
-                    answer = Solution(angles, status, iterations, error)
-                    return self._keep(answer, goal, followed=False)
+        if not search.exhausted:
+            if search.origin is None:
+                search.origin = start
+            error = _error(self._skeleton, search.origin, target)
+            return Solution(search.origin, SolveStatus.PROCESSING, iterations, error)
+        if search.nearest is None:
+            search.nearest = nearest()
+        try:
+            spent = 0
+            while spent < NEAREST_STRAINS:
+                spent += next(search.nearest)
+        except StopIteration as done:
+            self._unheld = goal
+            self._search = None
+            if done.value is not None:
+                angles = done.value
+                error = _error(self._skeleton, angles, target)
+                status = SolveStatus.SUCCESS if error <= tol else SolveStatus.FAILURE
+                answer = Solution(angles, status, iterations, error)
+                return self._keep(answer, goal, followed=False)
         return replace(plain, iterations=iterations)
 
     def _searched(

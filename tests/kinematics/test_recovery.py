@@ -740,6 +740,30 @@ def test_an_answer_without_room_to_brake_is_taken_where_none_has_it(name):
     assert strain(calls[-1].angles) == tight
 
 
+@pytest.mark.parametrize("name", ["ccd", "fabrik"])
+def test_the_chain_waits_where_the_search_began_until_it_finds_a_pose_the_motors_hold(name):
+    # Only the pose the chain starts in and poses with the base raised past 1 rad and the
+    # elbow bent the negative way hold; CCD's and FABRIK's searches take calls to find one.
+    arm = Skeleton.chain([100.0, 100.0, 100.0])
+    pose, target = np.array([0.3, 0.8, 0.3]), np.array([150.0, 100.0])
+
+    def strain(angles: np.ndarray) -> float:
+        held = (angles[0] > 1.0 and angles[1] < 0.0) or np.allclose(angles, pose)
+        return 0.5 if held else 2.0
+
+    robust = RobustSolver(arm, name, budget=20)
+    robust.strain = strain
+    calls = [
+        robust.solve(pose, target, max_iterations=10, tolerance=TOLERANCE)
+        for _ in range(STILL_CALLS + 30)
+    ]
+    searching = calls[STILL_CALLS:]
+    waited = [sol for sol in searching if sol.status is SolveStatus.PROCESSING]
+    assert waited and all(np.array_equal(sol.angles, pose) for sol in waited)
+    assert all(strain(sol.angles) <= HOLDS for sol in searching)
+    assert calls[-1].status is SolveStatus.SUCCESS and calls[-1].error <= TOLERANCE
+
+
 def test_when_no_pose_can_be_held_the_plain_answer_serves_without_searching_again():
     arm = Skeleton.chain([100.0, 100.0])
     robust = RobustSolver(arm, "dls")
