@@ -1152,7 +1152,7 @@ class _Search:
                 ):
                     if self.tight is None:
                         self.tight = sol.angles
-                    break
+                    break  # it leaves the motors little to brake with: one with room may follow
                 score = self.score(sol)
                 if score < self._best_score or sol.status is SolveStatus.SUCCESS:
                     self.best, self.best_far = sol.angles, far

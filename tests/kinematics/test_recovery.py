@@ -702,7 +702,7 @@ def test_an_answer_at_the_edge_stands_where_none_with_margin_reaches_the_target(
 def _three_link_room(tight_everywhere: bool):
     """A three-link arm, a target, and a stand-in strain: the elbow bent the positive way (the
     plain answers' bend) asks twice what the motors have, the other bend leaves them no room to
-    brake (between ``SPENT`` and ``HOLDS``) unless the base is raised past 1 rad (half)."""
+    brake (between ``SPENT`` and ``HOLDS``) unless the base is raised past 1 rad (then half)."""
     arm = Skeleton.chain([100.0, 100.0, 100.0])
     tight = (SPENT + HOLDS) / 2.0
 
