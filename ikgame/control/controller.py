@@ -14,7 +14,9 @@ With a servo, an answer that arrives near the chain is solved afresh ``ik_rate``
 (a game's frame rate), not every tick: in between, the servo drives toward it every tick,
 carried along with a moving target by the same joint rates that carry the chain with it.
 Anything else (a new target, a chain on its way to a farther answer, an answer still on its way,
-a search, a plan round obstacles, a moving base) is solved every tick. A chain with strong
+a search, a plan round obstacles, a moving base) is solved every tick, but for a tree a moving
+base carries toward targets beyond its reach: the answer leaning toward them is kept for a frame
+too. A chain with strong
 motors whose end is about to sweep through a still target on its way to a farther answer is
 caught there instead (see :mod:`~ikgame.control.catching`): the answer is then the pose it stops
 on, and from rest the one from where it stopped.
@@ -23,7 +25,7 @@ on, and from rest the one from where it stopped.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Final
 
 import numpy as np
@@ -155,6 +157,7 @@ class Controller:
         self._gravity: tuple[float, float] | None = None
         self.ik_rate = ik_rate
         self._fresh: _Fresh | None = None
+        self._lean: _Lean | None = None
         self._catch: _Catch | None = None
         # The pose the avoider plans the next target's way from, and the solver answering there.
         self._ahead: tuple[np.ndarray, RobustSolver] | None = None
@@ -213,7 +216,7 @@ class Controller:
     def set_solver(self, name: str) -> None:
         """Switch solver from the next tick on (``ccd``, ``jacobian_transpose``, ``dls``, ``fabrik``)."""
         self.solver.solver_name = name
-        self._fresh = None
+        self._fresh = self._lean = None
         self._catch = None
 
     def _goal_rates(
@@ -360,7 +363,7 @@ class Controller:
     def release(self) -> None:
         """Solve toward the target again after :meth:`hold`."""
         self._holding = False
-        self._fresh = None
+        self._fresh = self._lean = None
         self._catch = None
 
     @property
@@ -400,14 +403,17 @@ class Controller:
             moved = target is not None and _moved(target, self._last_target)
             goal_rates, jumped = self._goal_rates(measured, target, dt, base_motion)
         if target is None or self._holding:
-            self._fresh = None
+            self._fresh = self._lean = None
             if self._held is None:
                 self._held = self.skeleton.clamp(measured.copy())
             solution = Solution(self._held, SolveStatus.SUCCESS, 0, 0.0)
         else:
             solution = None
             if servo is not None and base_motion is None and not jumped:
+                self._lean = None  # the base stands: nothing carries the chain
                 solution = self._reuse(moved, goal_rates, dt, measured, velocities)
+            elif servo is not None and not (moved or jumped):
+                solution = self._leaning(dt)
             if solution is None:
                 solution = self._caught(measured, target, velocities, moved, base_motion, dt)
             if solution is None:
@@ -653,9 +659,28 @@ class Controller:
     def _solve(self, measured: np.ndarray, target: np.ndarray | TargetSet) -> Solution:
         """The solver's answer from the ``measured`` pose (see :meth:`_steered`)."""
         start = self._wrapped(measured)
-        solve = self.solver.solve_targets if isinstance(target, TargetSet) else self.solver.solve
+        tree = isinstance(target, TargetSet)
+        solve = self.solver.solve_targets if tree else self.solver.solve
         solution = solve(start, target, max_iterations=self.iterations, tolerance=self.arrival)
-        return self._steered(start, solution, target)
+        solution = self._steered(start, solution, target)
+        self._lean = _Lean(solution) if tree and self.solver.leaning else None
+        return solution
+
+    def _leaning(self, dt: float) -> Solution | None:
+        """The answer leaning toward targets beyond reach while the base carries the chain
+        (see :attr:`RobustSolver.leaning`), kept for :data:`IK_RATE`'s frame; None when it
+        must be solved now.
+
+        It changes only as the base moves: solved every tick, a ten-bone body crossing the
+        stage (`17_head_and_tail`) spent over a third of its run in the ten passes of a solve
+        that cannot arrive. Kept, it costs no iterations."""
+        lean = self._lean
+        if lean is None or self._ik_rate is None:
+            return None
+        lean.ticks += 1
+        if lean.ticks * dt * self._ik_rate > 1.0 - 1e-9:
+            return None
+        return replace(lean.solution, iterations=0)
 
     def _steered(
         self, start: np.ndarray, solution: Solution, target: np.ndarray | TargetSet
@@ -786,6 +811,15 @@ class _Catch:
     error: float
     refined: bool = False
     finishing: bool = False
+
+
+@dataclass(eq=False)
+class _Lean:
+    """An answer leaning toward targets beyond reach (see :meth:`Controller._leaning`) and
+    the ticks since it was solved."""
+
+    solution: Solution
+    ticks: int = 0
 
 
 @dataclass(eq=False)

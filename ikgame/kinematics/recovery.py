@@ -298,6 +298,10 @@ class RobustSolver:
         self._free: list[bool] = (~skeleton.limited).tolist()
         self._frame = object()
         self._carried = False  # the base moved since the last solve
+        self.leaning = False
+        """True when the last :meth:`solve_targets` answer was the plain solve leaning toward
+        targets beyond their branches' reach while the base carries the skeleton: an answer
+        that changes only as the base moves, which a caller may keep for a frame."""
         self._reach = skeleton.reach
         self._name = ""
         self._solve: Solver = get_solver(solver_name)
@@ -509,6 +513,7 @@ class RobustSolver:
         tol = _check_settings(max_iterations, tolerance)
         measured = float_angles(angles, skeleton.count)
         goal = _goal_key(targets)
+        self.leaning = False
 
         def measure(angles: np.ndarray | list[float]) -> tuple[float, np.ndarray]:
             errors = _target_errors(skeleton, np.asarray(angles), targets)
@@ -535,6 +540,7 @@ class RobustSolver:
             # While the base carries the skeleton toward targets still beyond their branches'
             # reach, no restart brings them closer, and a search would start afresh in every new
             # frame: the plain solve, leaning toward them, is the answer for now.
+            self.leaning = True
             return plain
         recovered = self._recover(
             plain,

@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from ikgame.control.controller import KEPT_STRAIN, Controller, joint_error
+from ikgame.control.controller import IK_RATE, KEPT_STRAIN, Controller, joint_error
 from ikgame.control.servo import Servo
 from ikgame.kinematics import Skeleton, TargetSet, forward_kinematics
 from ikgame.kinematics.clearance import Avoider, Clearance, Obstacles
@@ -128,6 +128,28 @@ def test_a_chain_its_base_carries_toward_its_target_is_held_off_the_floor():
         assert room.gaps(pose).min() > room.margin
         # Behind by no more than the gain's lag (120 px/s at 12/s): the target is still held.
         assert room.misses(pose, target)[0] < 10.0
+
+
+def test_a_body_carried_toward_targets_beyond_reach_is_solved_at_the_frame_rate(monkeypatch):
+    # 17's body crosses the stage, its head's and tail's next targets out of reach until it
+    # nears them: the answer leaning toward them changes only as the base moves, and is solved
+    # afresh once a frame (IK_RATE), not on every tick.
+    sim = Simulation(load_level(LEVELS_DIR / "17_head_and_tail.toml"), record=False)
+    robust = type(sim.controller.solver)
+    solve = robust.solve_targets
+    leaning: list[int] = []
+
+    def counted(self, *args, **kwargs):
+        answer = solve(self, *args, **kwargs)
+        if self.leaning:
+            leaning.append(sim.tick)
+        return answer
+
+    monkeypatch.setattr(robust, "solve_targets", counted)
+    while sim.time < 3.0:
+        sim.step()
+    assert len(leaning) > 20
+    assert int(np.diff(leaning).min()) == round(1.0 / (sim.dt * IK_RATE))
 
 
 def test_branches_on_the_base_follow_their_targets_each_at_its_own_speed():
