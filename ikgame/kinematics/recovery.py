@@ -497,6 +497,7 @@ class RobustSolver:
         """
         if not isinstance(targets, TargetSet):
             raise ValueError(f"targets must be a TargetSet, got {type(targets).__name__}")
+        self.leaning = False
         skeleton = self._skeleton
         targets.check(skeleton)
         if (
@@ -513,7 +514,6 @@ class RobustSolver:
         tol = _check_settings(max_iterations, tolerance)
         measured = float_angles(angles, skeleton.count)
         goal = _goal_key(targets)
-        self.leaning = False
 
         def measure(angles: np.ndarray | list[float]) -> tuple[float, np.ndarray]:
             errors = _target_errors(skeleton, np.asarray(angles), targets)
