@@ -789,14 +789,12 @@ class RobustSolver:
             search, iterations = self._searched(
                 plain, target, tol, seeds(), holds, way(STRAINED), roomy
             )
-            if not strained and not search.arrived:
+            if not strained:
                 # Until one with room to brake arrives, the first with the margin, and where
                 # none has the margin, the plain answer: the motors hold it all the same.
-                if search.tight is not None:
-                    answer = self._arrival(search.tight, target, iterations)
-                    if not search.exhausted:
-                        return answer
-                    return self._keep(answer, goal, followed=True)
+                found = self._found(search, goal, target, iterations, search.tight)
+                if found is not None:
+                    return found
                 if not search.exhausted:
                     return replace(plain, iterations=iterations)
                 self._unheld, self._search = goal, None
@@ -894,20 +892,14 @@ class RobustSolver:
         sagged, lifted and sagged again as the joints beyond them came in: the five weak links
         of `29_five_weak_links` moved their end 3 to 4 px in the last half second of the
         torque-bound target's hold."""
-        found = search.best if search.arrived else None
         meanwhile = search.fallback if search.tight is None else search.tight
-        if found is None and search.exhausted:
-            found = meanwhile
+        found = self._found(search, goal, target, iterations, meanwhile)
         if found is not None:
-            return self._keep(self._arrival(found, target, iterations), goal, followed=True)
-        if meanwhile is not None:
-            # Not kept: the search goes on at the next call.
-            return self._arrival(meanwhile, target, iterations)
+            return found
         if not search.exhausted:
             if search.origin is None:
                 search.origin = start
-            error = _error(self._skeleton, search.origin, target)
-            return Solution(search.origin, SolveStatus.PROCESSING, iterations, error)
+            return self._arrival(search.origin, target, iterations, SolveStatus.PROCESSING)
         if search.nearest is None:
             search.nearest = nearest()
         try:
@@ -973,20 +965,14 @@ class RobustSolver:
         the arrival this search had found on the fifth call; served then, the arm reaches
         the target 0.7 s sooner.
         """
-        found = search.best if search.arrived else None
-        if found is None and search.exhausted:
-            found = search.tight
+        found = self._found(search, goal, target, iterations, search.tight)
         if found is not None:
-            return self._keep(self._arrival(found, target, iterations), goal, followed=True)
-        if search.tight is not None:
-            # Not kept: the search goes on at the next call.
-            return self._arrival(search.tight, target, iterations)
+            return found
         if not search.exhausted:
             if wait is not None:
                 # The chain stays where the search began rather than set off on a way the
                 # motors cannot hold.
-                error = _error(self._skeleton, wait, target)
-                return Solution(wait, SolveStatus.PROCESSING, iterations, error)
+                return self._arrival(wait, target, iterations, SolveStatus.PROCESSING)
             return replace(plain, iterations=iterations)
         self._way_searched = goal
         self._search = None
@@ -996,10 +982,36 @@ class RobustSolver:
         answer = self._arrival(search.fallback, target, iterations)
         return self._keep(answer, goal, followed=True)
 
-    def _arrival(self, angles: np.ndarray, target: np.ndarray, iterations: int) -> Solution:
-        """A search's arrival at ``target`` (px), ``angles`` (radians), as an answer."""
-        error = _error(self._skeleton, angles, target)
-        return Solution(angles, SolveStatus.SUCCESS, iterations, error)
+    def _found(
+        self,
+        search: _Search,
+        goal: _Goal,
+        target: np.ndarray,
+        iterations: int,
+        meanwhile: np.ndarray | None,
+    ) -> Solution | None:
+        """The ``search``'s arrival, kept; else ``meanwhile`` (an arrival it does not end on),
+        served while it goes on and kept once it has tried every seed; None without either."""
+        found = search.best if search.arrived else None
+        if found is None and search.exhausted:
+            found = meanwhile
+        if found is not None:
+            return self._keep(self._arrival(found, target, iterations), goal, followed=True)
+        if meanwhile is not None:
+            # Not kept: the search goes on at the next call.
+            return self._arrival(meanwhile, target, iterations)
+        return None
+
+    def _arrival(
+        self,
+        angles: np.ndarray,
+        target: np.ndarray,
+        iterations: int,
+        status: SolveStatus = SolveStatus.SUCCESS,
+    ) -> Solution:
+        """The pose ``angles`` (radians) as an answer for ``target`` (px): a search's arrival,
+        or with ``processing`` the pose the chain waits in."""
+        return Solution(angles, status, iterations, _error(self._skeleton, angles, target))
 
     def _keep(self, solution: Solution, goal: _Goal, followed: bool) -> Solution:
         """Cache ``solution`` (an arrival, or the best there is) and return it read-only."""
